@@ -1,0 +1,1 @@
+"""One module per ``printwatch`` subcommand; see :mod:`octoprint_printwatch.cli`."""

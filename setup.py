@@ -1,0 +1,4 @@
+# Metadata lives in pyproject.toml; this stub only serves tools that still call setup.py.
+import setuptools
+
+setuptools.setup()
