@@ -1,0 +1,512 @@
+"""THE check: the one code path that runs at every check, in the plugin and in ``printwatch evaluate``.
+
+* :func:`prepare_job` runs once per job (at upload in the plugin, at load in
+  ``evaluate``): it builds the expected part, renders every camera's expected
+  views at every check height and derives each camera's alignment bound.
+* :class:`CheckRunner` runs the checks of one print in order and keeps what a
+  check needs from the previous ones (the last mask per camera and the
+  alignment found so far).
+* :func:`decide` is the combined decision rule (shape per camera now, size per
+  pair once the stereo check is wired in): the one place a pause is decided.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import cv2
+import numpy as np
+
+from .camera import Camera
+from .errors import PrintWatchError
+from .settings import DetectionSettings
+from .shape_check import ExpectedRegions, ShapeResult, check_shape
+
+VERDICTS = ("ok", "fail", "unknown")
+
+
+# ----------------------------------------------------------------- the plan
+@dataclass
+class JobPlan:
+    """Everything computed once per job.
+
+    part : the expected part (``core.geometry.PartModel``).
+    cameras : {name: Camera}; pairs : [(left, right)].
+    check_heights : [(layer, z)] the planned checks, ascending.
+    views : {(camera, z): ExpectedView} rendered at the planned heights (more are added on demand).
+    footprint : (n, 2) convex hull of the part's XY extent (mm, printer coordinates).
+    max_shift_px, tolerance_px : per camera, see :func:`camera_bounds`.
+    """
+
+    part: Any
+    cameras: dict[str, Camera]
+    pairs: list[tuple[str, str]]
+    check_heights: list[tuple[int, float]]
+    views: dict
+    footprint: np.ndarray
+    max_shift_px: dict[str, float]
+    tolerance_px: dict[str, float]
+    px_per_mm: dict[str, float] = field(default_factory=dict)
+    prepare_seconds: float = 0.0
+    notes: list[str] = field(default_factory=list)
+    cache_dir: Path | None = None
+
+    def view(self, camera: str, z: float, previous_z: float | None = None):
+        """The expected view of ``camera`` at ``z``; rendered now (and kept) when not planned."""
+        key = (camera, _zkey(z))
+        found = self.views.get(key)
+        if found is None:
+            for (cam, zz), view in self.views.items():
+                if cam == camera and abs(zz - z) < 1e-6:
+                    return view
+            from .render import render_expected_views
+
+            heights = [h for h in (previous_z, z) if h is not None and h <= z]
+            rendered = render_expected_views(self.part, [self.cameras[camera]], sorted(set(heights)),
+                                             cache_dir=self.cache_dir)
+            for (cam, zz), view in rendered.items():
+                if abs(zz - z) < 1e-6:
+                    found = view
+            if found is None:
+                raise PrintWatchError(f"camera {camera}: no expected view could be rendered at z={z:g} mm")
+            self.views[key] = found
+        return found
+
+    def regions(self, camera: str, z: float, settings: DetectionSettings,
+                previous_z: float | None = None) -> ExpectedRegions:
+        """The masks the shape check needs for ``camera`` at ``z``."""
+        cam = self.cameras[camera]
+        view = self.view(camera, z, previous_z)
+        silhouette = np.asarray(view.silhouette, bool)
+        band = np.asarray(view.new_band, bool)
+        search = bed_box_mask(cam, self.footprint, settings.search_margin_mm, 0.0, z + settings.search_above_top_mm)
+        dont_care, reflection = bed_marks_mask(cam, self.footprint, z, settings.bed_marks_margin_mm)
+        before = None
+        if previous_z is not None and previous_z < z:
+            before = np.asarray(self.view(camera, previous_z).silhouette, bool)
+        # (Limiting how thick a flat mark may look, ExpectedRegions.flat_max_px, was measured to
+        # let brims merged with skirts through as "extra": it stays off until it is done better.)
+        return ExpectedRegions(silhouette=silhouette, new_band=band, search=search, dont_care=dont_care,
+                               max_shift_px=self.max_shift_px[camera], tolerance_px=self.tolerance_px[camera],
+                               px_per_mm=self.px_per_mm.get(camera, 0.0), previous_silhouette=before,
+                               reflection=reflection)
+
+
+def _zkey(z: float) -> float:
+    return round(float(z), 4)
+
+
+def prepare_job(
+    *,
+    gcode_path: str | Path | None = None,
+    model_path: str | Path | None = None,
+    cameras: Mapping[str, Camera],
+    pairs: Sequence[Sequence[str]] = (),
+    check_heights: Sequence[tuple[int, float]] | None = None,
+    settings: DetectionSettings | None = None,
+    cache_dir: str | Path | None = None,
+    part: Any = None,
+) -> JobPlan:
+    """Build the job's plan: the expected part (from the model when given, else the G-code), the
+    expected views of every camera at every check height, and each camera's alignment bounds."""
+    from .geometry import part_from_gcode, part_from_mesh
+    from .render import render_expected_views
+
+    settings = settings or DetectionSettings()
+    started = time.perf_counter()
+    if not cameras:
+        raise PrintWatchError("no cameras: the checks need at least one calibrated camera")
+    notes: list[str] = []
+    if part is None:
+        if model_path is not None:
+            part = part_from_mesh(model_path)
+        elif gcode_path is not None:
+            part = part_from_gcode(gcode_path)
+        else:
+            raise PrintWatchError("neither a model nor a G-code file: the expected part is unknown")
+    notes.extend(getattr(part, "notes", []) or [])
+    cameras = dict(cameras)
+    heights = sorted({(int(layer), float(z)) for layer, z in (check_heights or [])}, key=lambda lz: lz[1])
+    views = {}
+    if heights:
+        rendered = render_expected_views(part, list(cameras.values()), [z for _, z in heights],
+                                         cache_dir=cache_dir)
+        views = {(cam, _zkey(z)): view for (cam, z), view in rendered.items()}
+    footprint = part_footprint(part.mesh)
+    max_shift, tolerance, scale = {}, {}, {}
+    for name, cam in cameras.items():
+        max_shift[name], tolerance[name], scale[name] = camera_bounds(cam, footprint, float(part.height()),
+                                                                      settings)
+    return JobPlan(part=part, cameras=cameras, pairs=[(a, b) for a, b in pairs], check_heights=heights,
+                   views=views, footprint=footprint, max_shift_px=max_shift, tolerance_px=tolerance, px_per_mm=scale,
+                   prepare_seconds=time.perf_counter() - started, notes=notes,
+                   cache_dir=Path(cache_dir) if cache_dir else None)
+
+
+def part_footprint(mesh) -> np.ndarray:
+    """(n, 2) convex hull (mm) of the part's vertices projected on the bed."""
+    xy = np.asarray(mesh.vertices, np.float64)[:, :2]
+    if len(xy) < 3:
+        raise PrintWatchError("the expected part has no extent on the bed")
+    return cv2.convexHull(xy.astype(np.float32)).reshape(-1, 2).astype(np.float64)
+
+
+def camera_bounds(camera: Camera, footprint: np.ndarray, height: float,
+                  settings: DetectionSettings) -> tuple[float, float, float]:
+    """(max_shift_px, tolerance_px, px_per_mm) for one camera looking at the part.
+
+    max_shift_px is the image motion the stated calibration error can cause at the part, taken
+    ``calibration_sigmas`` times: rotation error f*tan(a) + position error f*d/D + focal error
+    (pct of the part's distance from the principal point); never more is absorbed by the
+    alignment. tolerance_px grows with the image size (a 1280-px frame shows the same blur over
+    twice the pixels). px_per_mm is the image scale at the part.
+    """
+    centre = np.array([*footprint.mean(axis=0), height / 2.0])
+    distance = float(np.linalg.norm(camera.center - centre))
+    focal = float(camera.K[0, 0])
+    corners = np.array([[x, y, z] for x, y in footprint for z in (0.0, height)])
+    uv = camera.project(corners)
+    uv = uv[np.all(np.isfinite(uv), axis=1)]
+    reach = float(np.max(np.linalg.norm(uv - camera.K[:2, 2], axis=1))) if len(uv) else camera.width / 2
+    shift = (focal * math.tan(math.radians(settings.calibration_rotation_deg))
+             + focal * settings.calibration_position_mm / max(distance, 1.0)
+             + reach * settings.calibration_focal_pct / 100.0)
+    scale = max(1.0, camera.width / 640.0)
+    return (max(2.0, shift * settings.calibration_sigmas), settings.boundary_tolerance_px * scale,
+            focal / max(distance, 1.0))
+
+
+# ------------------------------------------------------------- image regions
+def _offset_polygon(polygon: np.ndarray, margin: float, samples: int = 16) -> np.ndarray:
+    """(m, 2) convex hull of ``polygon`` grown by ``margin`` mm (Minkowski sum with a circle)."""
+    if margin <= 0:
+        return polygon
+    angles = np.linspace(0, 2 * np.pi, samples, endpoint=False)
+    ring = np.column_stack([np.cos(angles), np.sin(angles)]) * margin
+    grown = (polygon[:, None, :] + ring[None, :, :]).reshape(-1, 2)
+    return cv2.convexHull(grown.astype(np.float32)).reshape(-1, 2).astype(np.float64)
+
+
+def _densify(polygon: np.ndarray, step: float = 2.0) -> np.ndarray:
+    """(n, 2) closed polygon with extra points every ~``step`` mm (so lens distortion bends its edges)."""
+    nxt = np.roll(polygon, -1, axis=0)
+    counts = np.maximum(1, (np.linalg.norm(nxt - polygon, axis=1) / step).astype(int))
+    index = np.repeat(np.arange(len(polygon)), counts)
+    t = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+    t = t / counts[index]
+    return polygon[index] + (nxt[index] - polygon[index]) * t[:, None]
+
+
+def _fill_projection(camera: Camera, points: np.ndarray) -> np.ndarray:
+    """(h, w) bool: convex hull of the projections of (n, 3) printer points."""
+    mask = np.zeros((camera.height, camera.width), np.uint8)
+    uv = camera.project(points)
+    uv = uv[np.all(np.isfinite(uv), axis=1)]
+    if len(uv) >= 3:
+        uv = np.clip(uv, -4 * camera.width, 5 * camera.width)
+        hull = cv2.convexHull(np.round(uv).astype(np.int32))
+        cv2.fillConvexPoly(mask, hull, 1)
+    return mask.astype(bool)
+
+
+def bed_box_mask(camera: Camera, footprint: np.ndarray, margin: float, z0: float, z1: float) -> np.ndarray:
+    """(h, w) bool: image of the box over the footprint grown by ``margin`` mm, from z0 to z1."""
+    ring = _densify(_offset_polygon(footprint, margin))
+    pts = np.vstack([np.column_stack([ring, np.full(len(ring), z)]) for z in (z0, z1)])
+    return _fill_projection(camera, pts)
+
+
+def bed_marks_mask(camera: Camera, footprint: np.ndarray, z: float, margin: float) -> tuple[np.ndarray, np.ndarray]:
+    """((h, w) bool, (h, w) bool): where flat things on the bed near the part (skirt, brim, purge)
+    can appear, and where the part's mirror image in a glossy bed can appear.
+
+    The bed ring is the footprint grown by ``margin`` mm at bed level; the reflection is the part's
+    box mirrored below the bed (z -> -z). The shape check ignores extra material only when it lies
+    wholly in this zone, so a tall thing standing in it (a moved part, spaghetti) still counts.
+    """
+    grown = _densify(_offset_polygon(footprint, margin))
+    flat = _fill_projection(camera, np.column_stack([grown, np.zeros(len(grown))]))
+    tight = _densify(_offset_polygon(footprint, 0.5))
+    mirror = _fill_projection(camera, np.vstack([np.column_stack([tight, np.full(len(tight), -h)])
+                                                 for h in (0.0, max(z, 0.2))]))
+    return flat, mirror
+
+
+# ----------------------------------------------------------------- results
+@dataclass
+class CheckResult:
+    """One check of all cameras (and pairs): what ``evaluate`` writes and the plugin shows.
+
+    shape : {camera: ShapeResult} for every camera that gave a frame.
+    size : {"left+right": size-check dict} per pair (filled by the stereo size check; empty until then).
+    unreadable : cameras that gave no usable frame at this check (never a cause for a pause).
+    """
+
+    layer: int
+    z: float
+    verdict: str
+    shape_error_pct: dict[str, float | None]
+    shape: dict[str, ShapeResult]
+    size: dict[str, dict]
+    reasons: list[str]
+    seconds: float
+    unreadable: list[str] = field(default_factory=list)
+    shape_seconds: float = 0.0       # the part of ``seconds`` spent in the shape checks (wall time)
+    shape_cpu_seconds: float = 0.0   # CPU time of the shape checks (all threads; less sensitive to load)
+
+    def to_json(self) -> dict:
+        """The check entry of the ``printwatch evaluate`` contract (plus a ``shape`` detail block)."""
+        return {
+            "layer": self.layer,
+            "z": round(self.z, 4),
+            "verdict": self.verdict,
+            "shape_error_pct": {cam: (None if pct is None else round(pct, 2))
+                                for cam, pct in self.shape_error_pct.items()},
+            "size": self.size,
+            "reasons": list(self.reasons),
+            "seconds": round(self.seconds, 4),
+            "shape": {cam: result.figures() for cam, result in self.shape.items()},
+            "unreadable": list(self.unreadable),
+        }
+
+
+def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings: DetectionSettings,
+           unreadable: Mapping[str, str] | Sequence[str] = ()) -> tuple[str, list[str]]:
+    """The combined decision rule -> (verdict, reasons).
+
+    * A camera counts only when it gave a frame and its background still matches the bed
+      (``usable``); dead or disturbed cameras are reported, never a cause for a pause.
+    * fail when at least half of the usable cameras (and at least ``min_failing_cameras``) fail
+      their shape check (Eq. 4.1 with tolerance over its threshold, or the newest band over the
+      band threshold), or when one camera fails decisively (missing AND extra material: the part
+      moved; or the newest band offset sideways by ``layer_shift_mm``: a layer shift),
+    * while the part visibly grows (median growth >= 50 %), a camera failing on missing material
+      alone does not count (a face the colour of what lies behind it looks missing);
+    * or when the part stopped growing (corroborated by missing material in at least one view:
+      25 % of the newest band, or half the threshold overall): the median over cameras of the observed rise of the
+      part's upper outline since the previous check is below ``min_growth_pct`` of the expected rise,
+      or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
+      abstains reports no ``error_pct`` and never fails);
+    * unknown when no camera and no pair gave usable evidence; ok otherwise.
+    """
+    if not isinstance(unreadable, Mapping):
+        unreadable = {cam: "no frame (camera unavailable)" for cam in unreadable}
+    reasons: list[str] = [f"{cam}: {why}: no verdict from this camera" for cam, why in unreadable.items()]
+    usable = {cam: r for cam, r in shape.items() if r.usable}
+    for cam, r in shape.items():
+        if not r.usable:
+            reasons.extend(r.reasons)
+    failing = [r for r in usable.values() if not r.passed]
+    # A part that stopped growing stopped in every view: the growth test is decided on the median over
+    # the cameras that could measure it, so one camera fooled by a top face the colour of the
+    # background cannot pause a print on its own.
+    growth = [r.growth_pct for r in usable.values() if r.growth_pct is not None]
+    # ... and where the part stopped, its newest layers are missing in some view; without that, a
+    # flat rise is a top skin closing in a colour the camera cannot tell from the bed
+    band_gone = any((r.band_missing_pct or 0.0) >= 25.0 or r.missing_pct >= r.threshold / 2.0
+                    for r in usable.values())
+    stalled = bool(growth) and float(np.median(growth)) < settings.min_growth_pct and band_gone
+    size_fail, size_usable = [], 0
+    for key, entry in size.items():
+        error = entry.get("error_pct") if isinstance(entry, Mapping) else None
+        if error is None or entry.get("abstained"):
+            continue
+        size_usable += 1
+        limit = float(entry.get("threshold_pct", settings.size_threshold_pct))
+        if error > limit:
+            size_fail.append(f"{key}: size differs from the model by {error:.1f}% (limit {limit:g}%)")
+    if not usable and not size_usable:
+        return "unknown", reasons or ["no usable camera at this check"]
+    # One camera seeing "material missing" or "extra material" may be fooled (a face the colour of
+    # the background, a reflection); a failure of the part is seen from most sides. So plain shape
+    # failures must come from at least half of the usable cameras (and ``min_failing_cameras``);
+    # a decisive signature (the part displaced, the newest layers offset) suffices from one camera.
+    needed = max(settings.min_failing_cameras, math.ceil(len(usable) / 2))
+    decisive = [r for r in failing if r.decisive]
+    if growth and float(np.median(growth)) >= 50.0:
+        # The part's outline rises as the model says: "material missing" without any extra material
+        # is then a face the camera cannot tell from what lies behind it, not a runout.
+        failing = [r for r in failing if r.decisive or r.extra_pct * 2.0 > r.missing_pct]
+    shape_fail = bool(decisive) or len(failing) >= needed
+    fail_reasons = [reason for r in (failing if shape_fail else []) for reason in r.reasons]
+    if stalled:
+        fail_reasons.append(f"the part has not grown as expected since the previous check: "
+                            f"{float(np.median(growth)):.0f}% of the expected rise seen "
+                            f"(median of {len(growth)} camera(s), limit {settings.min_growth_pct:g}%): "
+                            f"runout, clog or a stopped print?")
+    if shape_fail or size_fail or stalled:
+        return "fail", fail_reasons + size_fail + reasons
+    return "ok", reasons
+
+
+# ------------------------------------------------------------------ running
+class CheckRunner:
+    """Runs the checks of one print in order, keeping per-camera state between them."""
+
+    def __init__(self, plan: JobPlan, settings: DetectionSettings | None,
+                 backgrounds: Mapping[str, np.ndarray | None]):
+        self.plan = plan
+        self.settings = settings or DetectionSettings()
+        self.backgrounds = dict(backgrounds)
+        self.previous_masks: dict[str, np.ndarray] = {}
+        self.anchors: dict[str, tuple[int, int]] = {}
+        self.palettes: dict[str, np.ndarray] = {}
+        self.frozen: set[str] = set()
+        self.last_observed: dict[str, np.ndarray] = {}
+        self.last_offsets: dict[str, float | None] = {}
+        self.previous_z: float | None = None
+        self.keep_pictures = True
+        self.size_checks: dict = {}  # "left+right" -> stereo.PairSizeCheck, kept for the whole print
+
+    def run_check(self, layer: int, z: float, frames: Mapping[str, np.ndarray | None]) -> CheckResult:
+        """Shape check per camera (size per pair once wired in) and the combined verdict."""
+        started = time.perf_counter()
+        cpu_started = time.process_time()
+        settings = self.settings
+        shape: dict[str, ShapeResult] = {}
+        errors: dict[str, float | None] = {}
+        unreadable: dict[str, str] = {}
+        for name in self.plan.cameras:
+            frame = frames.get(name)
+            background = self.backgrounds.get(name)
+            if frame is None or background is None:
+                unreadable[name] = "no frame (camera unavailable)" if frame is None else "no background frame"
+                errors[name] = None
+                continue
+            regions = self.plan.regions(name, z, settings, self.previous_z)
+            result = check_shape(
+                name, background, frame, regions,
+                threshold=settings.threshold_for(name),
+                band_threshold=settings.band_threshold_pct,
+                # the band rule needs the same share of a view at any resolution
+                band_min_pixels=int(settings.band_min_pixels * max(1.0, (regions.silhouette.shape[1] / 640) ** 2)),
+                material_factor=settings.material_noise_factor,
+                bed_factor=settings.bed_noise_factor,
+                max_changed_bed_fraction=settings.max_changed_bed_fraction,
+                layer_shift_mm=settings.layer_shift_mm,
+                previous_offset_mm=self.last_offsets.get(name),
+                last_observed=self.last_observed.get(name),
+                previous_mask=self.previous_masks.get(name),
+                anchor=self.anchors.get(name),
+                max_drift=1 if name in self.frozen else 2,
+                palette=self.palettes.get(name),
+                keep_pictures=self.keep_pictures,
+            )
+            shape[name] = result
+            errors[name] = result.error_pct if result.usable else None
+            if result.usable:
+                self.last_observed[name] = result.observed_mask
+                self.last_offsets[name] = result.band_offset_mm
+            if result.palette is not None and result.usable and result.passed:
+                self.palettes[name] = result.palette
+            if result.usable and result.passed:
+                self.previous_masks[name] = result.observed_mask
+                # Calibration error does not change during a print: once the part is tall enough in
+                # this view for the alignment to be unambiguous, later checks stay near that shift
+                # (and a runout cannot walk the expected outline down, check by check).
+                if name not in self.frozen:
+                    self.anchors[name] = result.shift_px
+                    if _silhouette_rows(regions.silhouette) >= 2 * regions.max_shift_px:
+                        self.frozen.add(name)
+        shape_seconds = time.perf_counter() - started
+        shape_cpu_seconds = time.process_time() - cpu_started
+        size = self._size_check(z, frames, shape)
+        verdict, reasons = decide(shape, size, settings, unreadable)
+        self.previous_z = z
+        return CheckResult(layer=int(layer), z=float(z), verdict=verdict, shape_error_pct=errors, shape=shape,
+                           size=size, reasons=reasons, seconds=time.perf_counter() - started,
+                           unreadable=list(unreadable), shape_seconds=shape_seconds,
+                           shape_cpu_seconds=shape_cpu_seconds)
+
+    def _size_check(self, z: float, frames: Mapping[str, np.ndarray | None],
+                    shape: Mapping[str, ShapeResult]) -> dict[str, dict]:
+        """The stereo size check of every pair (seed ch. 5), fed with the shape check's observed masks
+        and image shifts. A pair that cannot measure abstains (``error_pct`` None): never a pause.
+        """
+        from .stereo.size_check import PairSizeCheck, SizeResult, SizeSettings
+
+        size: dict[str, dict] = {}
+        for left, right in self.plan.pairs:
+            key = f"{left}+{right}"
+            check = self.size_checks.get(key)
+            if check is None:
+                check = PairSizeCheck(self.plan.cameras[left], self.plan.cameras[right], self.plan.part.mesh,
+                                      self.plan.footprint,
+                                      SizeSettings(threshold_pct=self.settings.size_threshold_pct),
+                                      self.backgrounds.get(left), self.backgrounds.get(right))
+                self.size_checks[key] = check
+
+            # Shape first, then size (seed 3.5): a pair is measured only on silhouettes its cameras'
+            # shape checks accepted; otherwise the verdict is the shape check's and the pair abstains.
+            refused = [name for name in (left, right)
+                       if shape.get(name) is None or not shape[name].usable or not shape[name].passed]
+            if refused:
+                size[key] = SizeResult(key, None, None, None, None, None, abstained=True,
+                                       threshold_pct=self.settings.size_threshold_pct,
+                                       reason=f"not measured: the shape check did not pass on {', '.join(refused)}"
+                                       ).to_dict()
+                continue
+            # The shape check's image shift is the calibration error at the part (bounded, frozen).
+            result = check.measure(frames.get(left), frames.get(right), z,
+                                   mask_left=shape[left].observed_mask, mask_right=shape[right].observed_mask,
+                                   shift_left=shape[left].shift_px, shift_right=shape[right].shift_px)
+            size[key] = result.to_dict()
+        return size
+
+
+def _silhouette_rows(mask: np.ndarray) -> int:
+    rows = np.flatnonzero(mask.any(axis=1))
+    return int(rows[-1] - rows[0] + 1) if rows.size else 0
+
+
+def first_failure_layer(results: Sequence[CheckResult]) -> int | None:
+    for r in results:
+        if r.verdict == "fail":
+            return r.layer
+    return None
+
+
+# ------------------------------------------------------------------- replay
+def evaluate_recording(recording, settings: DetectionSettings | None = None, *, session_label: str | None = None,
+                       cache_dir: str | Path | None = None, overlay_dir: str | Path | None = None,
+                       keep_results: bool = False) -> dict:
+    """Replay a loaded :class:`~octoprint_printwatch.core.recording.Recording` through :class:`CheckRunner`
+    and return the ``printwatch evaluate`` document (``docs/recording-format.md``).
+
+    ``overlay_dir`` (optional) receives one overlay picture per camera per check
+    (``<NNN>_<camera>.jpg``). With ``keep_results`` the :class:`CheckResult` objects are
+    returned too, under the key ``"_results"`` (not JSON; for benchmarks and tests).
+    """
+    settings = settings or DetectionSettings()
+    checks = sorted(recording.checks, key=lambda c: c.z)
+    plan = prepare_job(gcode_path=recording.gcode, model_path=recording.model, cameras=recording.cameras,
+                       pairs=recording.pairs, check_heights=[(c.layer, c.z) for c in checks],
+                       settings=settings, cache_dir=cache_dir)
+    backgrounds = {name: recording.read_background(name) for name in recording.cameras}
+    runner = CheckRunner(plan, settings, backgrounds)
+    runner.keep_pictures = overlay_dir is not None
+    out_dir = Path(overlay_dir) if overlay_dir else None
+    if out_dir:
+        out_dir.mkdir(parents=True, exist_ok=True)
+    results = []
+    for index, check in enumerate(checks):
+        frames = {name: recording.read_frame(check, name) for name in recording.cameras}
+        result = runner.run_check(check.layer, check.z, frames)
+        results.append(result)
+        if out_dir:
+            for name, shape in result.shape.items():
+                cv2.imwrite(str(out_dir / f"{index:03d}_{name}.jpg"), shape.overlay)
+    doc = {
+        "session": session_label if session_label is not None else str(recording.root),
+        "prepare_seconds": round(plan.prepare_seconds, 3),
+        "checks": [r.to_json() for r in results],
+        "first_failure_layer": first_failure_layer(results),
+        "settings": settings.to_dict(),
+        "notes": plan.notes,
+    }
+    if keep_results:
+        doc["_results"] = results
+    return doc

@@ -1,0 +1,849 @@
+"""The single-camera shape check: what the camera sees vs. what should be there at this height.
+
+One camera, one check: background frame (empty bed) + current frame + the
+expected silhouette at the check height (rendered from the calibrated camera)
+-> shape error % (the seed's Eq. 4.1), missing and extra material, the error in
+the newest layer band, a verdict, reasons and an overlay picture.
+
+Stages (each a function, each tested on synthetic images with known answers):
+
+1. :func:`material_evidence` - background removal. The background is brought
+   to the frame's exposure with per-channel gains measured on pixels that are
+   certainly bed (far from the expected part), then three cues are compared,
+   each tolerant of a 1-px camera shake (the frame pixel is compared with the
+   range of the background's 3x3 neighbourhood): chromaticity (colour with the
+   shading divided out, so shadows do not count), brightening, and darkening
+   plus new texture (which are only trusted where the part is expected,
+   because outside it they are mostly shadows). Each cue is divided by its own
+   noise level measured on the certain-bed pixels, so thresholds are in units
+   of this camera's noise, not in grey levels tuned to one scene.
+2. :func:`align_expected` - bounded alignment. The expected silhouette may be
+   shifted by at most the image motion the calibration error can cause (from
+   the settings' 0.5 deg / 1 mm / 1 %), and after the first check by at most a
+   couple of pixels from the previous shift (calibration error does not change
+   during a print), so a part that moved 10 mm is never aligned back.
+3. :func:`compare_masks` - Eq. 4.1 with a boundary tolerance, split into
+   missing (expected, confidently bed now) and extra (material where none is
+   expected, outside the bed-marks/reflection zone, inside the search box), and
+   the same figures for the newest layer band.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import cv2
+import numpy as np
+
+#: Shadows keep at least this fraction of the bed's brightness; darker than that is material anywhere.
+SHADOW_MIN_RATIO = 0.35
+#: Noise floors (grey levels / chromaticity units) so a perfectly clean synthetic image still has a scale.
+_NOISE_FLOOR = {"chroma": 2.0, "bright": 3.0, "dark": 3.0, "texture": 3.0}
+#: A bed pixel whose colour moved this far (grey levels, after exposure normalisation) is not the
+#: background any more: used to tell a moved camera / changed scene from a failed print.
+_CHANGED_LEVELS = 25.0
+_KERNEL3 = np.ones((3, 3), np.uint8)
+_KERNEL5 = np.ones((5, 5), np.uint8)
+
+
+# ----------------------------------------------------------------- data types
+@dataclass
+class ExpectedRegions:
+    """What the check needs to know about one camera at one check height; all masks (h, w) bool.
+
+    silhouette : the part as it should be seen now (distorted image).
+    new_band : what was added since the previous check height.
+    search : where extra material is looked for (the part's surroundings, below the parked hotend).
+    dont_care : where material on the bed is not held against the print (skirt/brim ring, reflection).
+    max_shift_px : the largest image shift the calibration error can explain.
+    tolerance_px : differences closer than this to the expected outline are not counted.
+    px_per_mm : image scale at the part, to express the layer-shift test in millimetres.
+    previous_silhouette : the expected silhouette at the previous check height (growth test), or None.
+    flat_max_px : how thick (px) something lying flat in the bed-marks zone can look from this camera.
+    reflection : (h, w) bool or None, the part's mirror image below the bed (any thickness is ignored there).
+    """
+
+    silhouette: np.ndarray
+    new_band: np.ndarray
+    search: np.ndarray
+    dont_care: np.ndarray
+    max_shift_px: float
+    tolerance_px: float
+    px_per_mm: float = 0.0   # image scale at the part (0: unknown, no layer-shift test)
+    previous_silhouette: np.ndarray | None = None   # the expected silhouette at the previous check
+    flat_max_px: float = 1e9   # thickest blob (px) that can still be a flat mark on the bed
+    reflection: np.ndarray | None = None   # where the part's mirror image in a glossy bed can appear
+
+
+@dataclass
+class Evidence:
+    """Per-pixel result of background removal on a crop.
+
+    material : (h, w) bool, something that is not the empty bed (strong cues, or weak cues inside the prior).
+    strong : (h, w) bool, material by the cues shadows cannot cause (colour, brightening, deeper than a shadow);
+        only these count as extra material.
+    bed : (h, w) bool, confidently the empty bed (every cue within the noise).
+    score : (h, w) float32, the strongest cue in noise units (for pictures and debugging).
+    noise : per-cue noise scales measured on certain-bed pixels.
+    gains : (3,) per-channel exposure gains applied to the background.
+    changed_bed_fraction : fraction of certain-bed pixels with strong cues (camera moved / lights changed when high).
+    """
+
+    material: np.ndarray
+    strong: np.ndarray
+    bed: np.ndarray
+    score: np.ndarray
+    noise: dict
+    gains: np.ndarray
+    changed_bed_fraction: float
+    background_norm: np.ndarray | None = None   # (h, w, 3) float32, the background at the frame's exposure
+
+
+@dataclass
+class ShapeResult:
+    """Shape check of one camera at one check (see module docstring)."""
+
+    camera: str
+    error_pct: float               # Eq. 4.1 with boundary tolerance: (missing + extra) / expected * 100
+    raw_error_pct: float           # Eq. 4.1 without tolerance, after alignment (the seed's figure)
+    missing_pct: float             # expected but confidently bed now, % of expected
+    extra_pct: float               # material where none is expected, % of expected
+    band_error_pct: float | None   # (missing in band + extra next to band) / band * 100; None when the band is too thin
+    band_missing_pct: float | None
+    band_pixels: int
+    expected_pixels: int
+    band_offset_mm: float | None  # how far the newest layers sit sideways from where they belong (None: not measured)
+    growth_pct: float | None      # of the new material expected since the previous check (where it would show), % seen
+    shift_px: tuple[int, int]      # (dx, dy) applied to the expected silhouette
+    threshold: float
+    band_threshold: float
+    passed: bool
+    usable: bool = True
+    reasons: list[str] = field(default_factory=list)
+    #: failed with a signature no nuisance produces (part displaced: missing AND extra; newest layers
+    #: offset sideways): one camera is enough for the combined rule
+    decisive: bool = False
+    changed_bed_fraction: float = 0.0
+    observed_mask: np.ndarray | None = field(default=None, repr=False)   # (h, w) bool, full frame
+    palette: np.ndarray | None = field(default=None, repr=False)         # (k, 3) the part's colours seen now
+    # pieces the overlay is drawn from (kept so the picture costs nothing unless asked for)
+    _frame: np.ndarray | None = field(default=None, repr=False)
+    _expected: np.ndarray | None = field(default=None, repr=False)
+    _missing: np.ndarray | None = field(default=None, repr=False)
+    _extra: np.ndarray | None = field(default=None, repr=False)
+
+    @cached_property
+    def overlay(self) -> np.ndarray | None:
+        """(h, w, 3) uint8 BGR: the frame dimmed, observed material tinted green, expected outline
+        yellow, missing material red, extra material magenta, figures written top-left."""
+        if self._frame is None:
+            return None
+        return draw_overlay(self._frame, self.observed_mask, self._expected, self._missing, self._extra,
+                            f"{self.camera}: {self.error_pct:.1f}% (limit {self.threshold:g}%) "
+                            f"{'ok' if self.passed else 'FAIL'}")
+
+    def figures(self) -> dict:
+        """The numbers, JSON-ready."""
+        return {
+            "error_pct": round(self.error_pct, 2),
+            "raw_error_pct": round(self.raw_error_pct, 2),
+            "missing_pct": round(self.missing_pct, 2),
+            "extra_pct": round(self.extra_pct, 2),
+            "band_error_pct": None if self.band_error_pct is None else round(self.band_error_pct, 2),
+            "band_missing_pct": None if self.band_missing_pct is None else round(self.band_missing_pct, 2),
+            "band_offset_mm": None if self.band_offset_mm is None else round(self.band_offset_mm, 2),
+            "growth_pct": None if self.growth_pct is None else round(self.growth_pct, 1),
+            "shift_px": list(self.shift_px),
+            "threshold": self.threshold,
+            "passed": self.passed,
+            "usable": self.usable,
+        }
+
+
+# ------------------------------------------------------------------- helpers
+def disk(radius: float) -> np.ndarray:
+    r = max(0, int(round(radius)))
+    return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
+
+
+def dilate(mask: np.ndarray, radius: float) -> np.ndarray:
+    """(h, w) bool grown by ``radius`` px (Euclidean; a distance transform, so large radii cost no more)."""
+    if radius < 0.5:
+        return mask.astype(bool)
+    if radius <= 2.5:
+        return cv2.dilate(mask.astype(np.uint8), disk(radius)).astype(bool)
+    if not mask.any():
+        return np.zeros(mask.shape, bool)
+    return cv2.distanceTransform((~mask.astype(bool)).astype(np.uint8), cv2.DIST_L2, 3) <= radius
+
+
+def erode(mask: np.ndarray, radius: float) -> np.ndarray:
+    """(h, w) bool shrunk by ``radius`` px; the image border does not erode."""
+    if radius < 0.5:
+        return mask.astype(bool)
+    if radius <= 2.5:
+        return cv2.erode(mask.astype(np.uint8), disk(radius), borderType=cv2.BORDER_REPLICATE).astype(bool)
+    padded = cv2.copyMakeBorder(mask.astype(np.uint8), 1, 1, 1, 1, cv2.BORDER_REPLICATE)
+    return cv2.distanceTransform(padded, cv2.DIST_L2, 3)[1:-1, 1:-1] > radius
+
+
+def shift_mask(mask: np.ndarray, dx: int, dy: int) -> np.ndarray:
+    """(h, w) bool moved by (dx, dy) pixels, zeros shifted in."""
+    if dx == 0 and dy == 0:
+        return mask
+    out = np.zeros_like(mask)
+    h, w = mask.shape
+    ys, yd = (slice(0, h - dy), slice(dy, h)) if dy >= 0 else (slice(-dy, h), slice(0, h + dy))
+    xs, xd = (slice(0, w - dx), slice(dx, w)) if dx >= 0 else (slice(-dx, w), slice(0, w + dx))
+    out[yd, xd] = mask[ys, xs]
+    return out
+
+
+def bounding_box(mask: np.ndarray, pad: int = 0) -> tuple[int, int, int, int] | None:
+    """(y0, y1, x0, x1) half-open box around the True pixels, padded and clipped; None if empty."""
+    rows = np.flatnonzero(mask.any(axis=1))
+    if rows.size == 0:
+        return None
+    cols = np.flatnonzero(mask.any(axis=0))
+    h, w = mask.shape
+    return (max(0, rows[0] - pad), min(h, rows[-1] + 1 + pad), max(0, cols[0] - pad), min(w, cols[-1] + 1 + pad))
+
+
+def _luma_chroma(image: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(h, w, 3) float32 BGR -> luma (h, w) and two shading-invariant chromaticity channels (h, w).
+
+    Chromaticity is an opponent colour divided by brightness (plus a constant that keeps
+    the noise of dark pixels from being amplified), scaled to roughly grey-level units.
+    """
+    b, g, r = image[..., 0], image[..., 1], image[..., 2]
+    luma = (b + g + r) * (1.0 / 3.0)
+    denom = luma + 6.0
+    c1 = (r - g) * (100.0 / denom)
+    c2 = (r + g - 2.0 * b) * (50.0 / denom)
+    return luma, c1, c2
+
+
+def _outside_range(value: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    """How far ``value`` lies outside [low, high], per pixel (0 inside)."""
+    return np.maximum(np.maximum(low - value, value - high), 0.0)
+
+
+def _noise_scale(score: np.ndarray, sample: np.ndarray, floor: float) -> float:
+    """Robust noise level of a non-negative cue on certain-bed pixels (``sample``: flat indices):
+    its 90th percentile, so a few changed pixels (strings, a skirt) cannot dominate."""
+    values = score.ravel()[sample]
+    if values.size < 50:
+        return floor
+    return max(floor, float(np.percentile(values, 90)))
+
+
+# --------------------------------------------------- stage 1: background removal
+def material_evidence(
+    background: np.ndarray,
+    frame: np.ndarray,
+    prior: np.ndarray,
+    bed_sample: np.ndarray,
+    *,
+    material_factor: float = 5.0,
+    bed_factor: float = 2.5,
+    previous: np.ndarray | None = None,
+) -> Evidence:
+    """Background removal on one crop.
+
+    Parameters
+    ----------
+    background, frame : (h, w, 3) uint8 BGR, same size.
+    prior : (h, w) bool where the part may be (expected silhouette grown by the alignment bound);
+        darkening and new texture count as material only here (elsewhere they are mostly shadows).
+    bed_sample : (h, w) bool pixels that are certainly empty bed (exposure gains and noise levels).
+    material_factor, bed_factor : thresholds in noise units for "material" and "confidently bed".
+    previous : (h, w) bool, the previous check's material mask: inside it (and the prior) weaker evidence
+        suffices, as the seed reused its ``prev`` mask; a part that left it shows bed and is not kept.
+    """
+    bg = background.astype(np.float32)
+    fr = frame.astype(np.float32)
+    sample_mask = bed_sample if int(bed_sample.sum()) >= 50 else ~prior
+    sample = np.flatnonzero(sample_mask)
+    if sample.size > 6000:  # statistics need a few thousand pixels, not all of them
+        sample = sample[:: sample.size // 6000 + 1]
+    # exposure / white balance: per-channel gain, median ratio on certain-bed pixels
+    gains = np.ones(3, np.float32)
+    if sample.size:
+        bg_s, fr_s = bg.reshape(-1, 3)[sample], fr.reshape(-1, 3)[sample]
+        ok = bg_s.min(axis=1) > 8.0
+        if ok.sum() >= 50:
+            gains = np.median(fr_s[ok] / bg_s[ok], axis=0).astype(np.float32)
+            gains = np.clip(gains, 0.2, 5.0)
+    bg *= gains
+
+    luma_f, c1_f, c2_f = _luma_chroma(fr)
+    luma_b, c1_b, c2_b = _luma_chroma(bg)
+    # 3x3 neighbourhood ranges of the background: a 1-px shake between background and frame is not a change
+    lo_l, hi_l = cv2.erode(luma_b, _KERNEL3), cv2.dilate(luma_b, _KERNEL3)
+    # the chromaticity change, brought back to grey levels at the frame's brightness so its noise
+    # does not grow in dark pixels (where JPEG's coarse chroma would otherwise look like a colour change)
+    chroma = np.hypot(_outside_range(c1_f, cv2.erode(c1_b, _KERNEL3), cv2.dilate(c1_b, _KERNEL3)),
+                      _outside_range(c2_f, cv2.erode(c2_b, _KERNEL3), cv2.dilate(c2_b, _KERNEL3)))
+    chroma *= (luma_f + 6.0) * 0.01
+    bright = np.maximum(luma_f - hi_l, 0.0)
+    dark = np.maximum(lo_l - luma_f, 0.0)
+    grad_f = _gradient(luma_f)
+    texture = np.maximum(grad_f - cv2.dilate(_gradient(luma_b), _KERNEL3) * 1.5, 0.0)
+
+    cues = {"chroma": chroma, "bright": bright, "dark": dark, "texture": texture}
+    noise = {name: _noise_scale(cue, sample, _NOISE_FLOOR[name]) for name, cue in cues.items()}
+    z = {name: cue * (1.0 / noise[name]) for name, cue in cues.items()}
+    # darker than any plausible shadow is material anywhere
+    deep_dark = (luma_f < SHADOW_MIN_RATIO * lo_l) & (z["dark"] > material_factor)
+    strong = np.maximum(z["chroma"], z["bright"])
+    weak = np.maximum(z["dark"], z["texture"])
+    strong_material = (strong > material_factor) | deep_dark
+    material = strong_material | ((weak > material_factor) & prior)
+    if previous is not None:
+        hint = previous & prior
+        material |= hint & (np.maximum(strong, weak) > bed_factor)
+    score = np.maximum(strong, weak)
+    bed = score < bed_factor
+    # absolute (not noise-relative) test: when the whole scene changed, the noise levels change with it
+    changed_px = (chroma > 0.6 * _CHANGED_LEVELS) | (bright > _CHANGED_LEVELS) | (dark > _CHANGED_LEVELS)
+    changed = float(np.mean(changed_px.ravel()[sample])) if sample.size else 0.0
+    return Evidence(material=material, strong=strong_material, bed=bed, score=score, noise=noise, gains=gains,
+                    background_norm=bg,
+                    changed_bed_fraction=changed)
+
+
+def _gradient(luma: np.ndarray) -> np.ndarray:
+    gx = cv2.Sobel(luma, cv2.CV_32F, 1, 0, ksize=3)
+    gy = cv2.Sobel(luma, cv2.CV_32F, 0, 1, ksize=3)
+    return cv2.blur(np.abs(gx) + np.abs(gy), (3, 3)) * 0.25
+
+
+def part_palette(frame: np.ndarray, mask: np.ndarray, groups: int = 5) -> np.ndarray | None:
+    """(groups, 3) float32 typical colours of the part: the frame's pixels under ``mask`` sorted by
+    brightness and averaged in equal groups (lit faces to shaded ones). None when too few pixels."""
+    pixels = frame[mask]
+    if len(pixels) < 50:
+        return None
+    if len(pixels) > 4000:
+        pixels = pixels[:: len(pixels) // 4000 + 1]
+    pixels = pixels.astype(np.float32)
+    order = np.argsort(pixels.sum(axis=1))
+    return np.stack([chunk.mean(axis=0) for chunk in np.array_split(pixels[order], groups)])
+
+
+def detectable_fraction(palette: np.ndarray, background: np.ndarray, noise: dict,
+                        material_factor: float) -> np.ndarray:
+    """(n,) fraction of the palette's colours that background removal would tell apart from each of
+    the (n, 3) background colours: a missing part can only be claimed where it would have been seen."""
+    pal = palette.astype(np.float32)[None, :, :]          # (1, k, 3)
+    bg = background.astype(np.float32)[:, None, :]        # (n, 1, 3)
+    luma_p, c1_p, c2_p = _luma_chroma(pal)
+    luma_b, c1_b, c2_b = _luma_chroma(bg)
+    chroma = np.hypot(c1_p - c1_b, c2_p - c2_b) * (luma_p + 6.0) * 0.01
+    z = np.maximum(np.maximum(chroma / noise["chroma"], np.maximum(luma_p - luma_b, 0) / noise["bright"]),
+                   np.maximum(luma_b - luma_p, 0) / noise["dark"])
+    return (z > material_factor).mean(axis=1)
+
+
+def clean_mask(material: np.ndarray, fill_like: np.ndarray | None = None) -> np.ndarray:
+    """Morphology: drop specks and 1-2 px strings (opening), bridge small gaps (closing), and fill holes
+    that the expected silhouette also fills (a part seen through its own bore keeps the hole)."""
+    m = cv2.morphologyEx(material.astype(np.uint8), cv2.MORPH_OPEN, _KERNEL3)
+    m = cv2.morphologyEx(m, cv2.MORPH_CLOSE, disk(2))
+    if fill_like is not None and m.any():
+        h, w = m.shape
+        padded = cv2.copyMakeBorder(m, 1, 1, 1, 1, cv2.BORDER_CONSTANT, value=0)
+        cv2.floodFill(padded, np.zeros((h + 4, w + 4), np.uint8), (0, 0), 1)
+        holes = (padded[1:-1, 1:-1] == 0) & fill_like
+        m = m.astype(bool) | holes
+    return m.astype(bool)
+
+
+# ---------------------------------------------------------- stage 2: alignment
+def align_expected(
+    observed: np.ndarray,
+    expected: np.ndarray,
+    max_shift: int,
+    *,
+    anchor: tuple[int, int] | None = None,
+    max_drift: int = 2,
+    profile_of: np.ndarray | None = None,
+) -> tuple[int, int]:
+    """Shift (dx, dy) of ``expected`` that best matches ``observed`` (both (h, w) bool), searched within
+    ``max_shift`` pixels of zero and, when ``anchor`` is given, within ``max_drift`` of the anchor.
+
+    Maximises the overlap, which for binary masks is the same as minimising Eq. 4.1's symmetric
+    difference; ties go to the smallest move, or, with ``profile_of`` (the expected silhouette),
+    to the shift that best matches the upper outlines. Returns (0, 0) when either mask is empty.
+    """
+    box = bounding_box(expected)
+    if box is None or max_shift <= 0 or not observed.any():
+        return (0, 0) if anchor is None else anchor
+    y0, y1, x0, x1 = box
+    s = int(max_shift)
+    h, w = observed.shape
+    padded = np.zeros((y1 - y0 + 2 * s, x1 - x0 + 2 * s), np.float32)
+    sy0, sy1, sx0, sx1 = max(0, y0 - s), min(h, y1 + s), max(0, x0 - s), min(w, x1 + s)
+    padded[sy0 - (y0 - s): sy1 - (y0 - s), sx0 - (x0 - s): sx1 - (x0 - s)] = observed[sy0:sy1, sx0:sx1]
+    template = expected[y0:y1, x0:x1].astype(np.float32)
+    dys, dxs = np.mgrid[-s: s + 1, -s: s + 1]
+    if anchor is not None:
+        # only the cells near the anchor can win: compute those exactly, nothing else
+        overlap = np.full((2 * s + 1, 2 * s + 1), -np.inf, np.float32)
+        ya, yb = max(0, anchor[1] - max_drift + s), min(2 * s + 1, anchor[1] + max_drift + s + 1)
+        xa, xb = max(0, anchor[0] - max_drift + s), min(2 * s + 1, anchor[0] + max_drift + s + 1)
+        if ya < yb and xa < xb:
+            window = padded[ya: yb - 1 + template.shape[0], xa: xb - 1 + template.shape[1]]
+            overlap[ya:yb, xa:xb] = cv2.matchTemplate(window, template, cv2.TM_CCORR)
+    else:
+        overlap = _overlap_map(padded, template, s)  # (2s+1, 2s+1), index = shift + s
+    allowed = dxs * dxs + dys * dys <= s * s
+    if anchor is not None:
+        allowed &= (np.abs(dxs - anchor[0]) <= max_drift) & (np.abs(dys - anchor[1]) <= max_drift)
+        if not allowed.any():
+            return anchor
+    # Calibration errors are small more often than large: a Gaussian prior on the shift (s is
+    # 2.5 standard deviations) makes a far shift win only on clearly better overlap, so a faint or
+    # partial mask cannot drag the outline across the part. It also breaks ties (a runout leaves
+    # the top free to slide) towards the smallest move.
+    sigma = max(s / 2.5, 1.0)
+    penalty = 0.01 * ((dxs * dxs + dys * dys) / (sigma * sigma)) * float(template.sum())
+    score = np.where(allowed, overlap - penalty, -np.inf)
+    if profile_of is not None:
+        # Material attached to the part at bed level (brim, skirt, shadow, reflection) makes the
+        # observed blob larger than the template, and the overlap is then flat wherever the template
+        # fits inside it. Among those near-best shifts, take the one that puts the expected upper
+        # outline on the observed one: bed-level material never reaches the part's top edge.
+        best = float(score.max())
+        plateau = score >= best - 0.02 * float(template.sum())
+        if plateau.sum() > 1:
+            cost = _profile_cost(observed, profile_of, dxs[plateau], dys[plateau])
+            k = int(np.argmin(cost + 1e-3 * np.hypot(dxs[plateau], dys[plateau])))
+            return int(dxs[plateau][k]), int(dys[plateau][k])
+    iy, ix = np.unravel_index(int(np.argmax(score)), score.shape)
+    return int(dxs[iy, ix]), int(dys[iy, ix])
+
+
+def _overlap_map(padded: np.ndarray, template: np.ndarray, s: int) -> np.ndarray:
+    """(2s+1, 2s+1) overlap of ``template`` with ``padded`` at every shift, = cv2.matchTemplate TM_CCORR.
+
+    Large searches are done at half resolution first and the map is then filled in at full
+    resolution only around the coarse optimum (a few ms instead of tens at 640x480).
+    """
+    if s <= 6 or min(template.shape) < 16:
+        return cv2.matchTemplate(padded, template, cv2.TM_CCORR)
+    small_p = cv2.resize(padded, (padded.shape[1] // 2, padded.shape[0] // 2), interpolation=cv2.INTER_AREA)
+    small_t = cv2.resize(template, (template.shape[1] // 2, template.shape[0] // 2), interpolation=cv2.INTER_AREA)
+    coarse = cv2.matchTemplate(small_p, small_t, cv2.TM_CCORR) * 4.0
+    # upsample the coarse map to every shift, then refine exactly within +-3 px of its best cells
+    full = cv2.resize(coarse, (2 * s + 1, 2 * s + 1), interpolation=cv2.INTER_LINEAR)
+    top = np.argsort(full.ravel())[-3:]
+    for index in top:
+        cy, cx = np.unravel_index(int(index), full.shape)
+        ya, yb = max(0, cy - 3), min(2 * s + 1, cy + 4)
+        xa, xb = max(0, cx - 3), min(2 * s + 1, cx + 4)
+        window = padded[ya: yb - 1 + template.shape[0], xa: xb - 1 + template.shape[1]]
+        full[ya:yb, xa:xb] = cv2.matchTemplate(window, template, cv2.TM_CCORR)
+    return full
+
+
+def upper_profile(mask: np.ndarray) -> np.ndarray:
+    """(w,) float: row of the top-most True pixel of each column, NaN for empty columns."""
+    has = mask.any(axis=0)
+    top = np.argmax(mask, axis=0).astype(np.float32)
+    top[~has] = np.nan
+    return top
+
+
+def _profile_cost(observed: np.ndarray, expected: np.ndarray, dxs: np.ndarray, dys: np.ndarray,
+                  cap: float = 6.0) -> np.ndarray:
+    """(n,) capped mean |observed top row - shifted expected top row| over the expected columns."""
+    obs = upper_profile(observed)
+    exp = upper_profile(expected)
+    cols = np.flatnonzero(~np.isnan(exp))
+    w = observed.shape[1]
+    costs = np.empty(len(dxs), np.float32)
+    for i, (dx, dy) in enumerate(zip(dxs, dys)):
+        target = cols + int(dx)
+        ok = (target >= 0) & (target < w)
+        diff = np.abs(obs[target[ok]] - (exp[cols[ok]] + dy))
+        diff = np.where(np.isnan(diff), cap, np.minimum(diff, cap))
+        costs[i] = diff.mean() if diff.size else cap
+    return costs
+
+
+def band_offset(observed: np.ndarray, expected: np.ndarray, band: np.ndarray, reach: int) -> int:
+    """Horizontal offset (px) of the newest band relative to the (aligned) older part, or 0.
+
+    For each offset s within ``reach`` the silhouette "older part + band moved by s" is compared
+    with what is observed, over the band's rows; the best s is returned when it explains at least
+    half of the mismatch at s = 0 and at least 15 % of the band (a layer shift), else 0. A runout
+    (band absent) or a normal band (best at 0) gives 0; spaghetti may give anything, and fails anyway.
+    """
+    rows = np.flatnonzero(band.any(axis=1))
+    if rows.size == 0 or reach < 1:
+        return 0
+    r0, r1 = max(0, rows[0] - 2), min(band.shape[0], rows[-1] + 3)
+    older = (expected & ~band)[r0:r1]
+    seen = observed[r0:r1]
+    strip = band[r0:r1]
+    best_s, best, at_zero = 0, None, None
+    for s in range(-reach, reach + 1):
+        moved = shift_mask(strip, s, 0)
+        mismatch = int(np.count_nonzero(seen ^ (older | moved)))
+        if s == 0:
+            at_zero = mismatch
+        if best is None or mismatch < best or (mismatch == best and abs(s) < abs(best_s)):
+            best, best_s = mismatch, s
+    gain = at_zero - best
+    if best_s != 0 and gain >= 0.5 * at_zero and gain >= 0.15 * int(band.sum()):
+        return best_s
+    return 0
+
+
+def profile_growth(observed: np.ndarray, previous: np.ndarray, expected: np.ndarray,
+                   expected_before: np.ndarray, min_rise: float = 3.0, min_columns: int = 12) -> float | None:
+    """How much the part's upper outline rose since the previous check, in % of what the model says.
+
+    Per image column where the expected upper outline rises by at least ``min_rise`` px, the ratio of
+    the observed rise (previous vs current material mask) to the expected one; the median over those
+    columns, times 100 (None unless the median expected rise is at least 1.5 ``min_rise``).
+    A part that stopped growing gives ~0, a normal one ~100. The top face of a
+    part is often the colour of what lies behind it, so the outline is compared rather than the band's
+    area: the near and the far edge of a top face rise alike. None when fewer than ``min_columns``
+    columns qualify (a camera looking straight down, a part that ended).
+    """
+    exp_now = upper_profile(expected)
+    exp_before = upper_profile(expected_before)
+    rise_expected = exp_before - exp_now
+    obs_now, obs_before = upper_profile(observed), upper_profile(previous)
+    cols = np.flatnonzero((rise_expected >= min_rise) & ~np.isnan(obs_now) & ~np.isnan(obs_before))
+    # a rise of a few pixels is within what mask edges wobble by between two frames
+    if cols.size < min_columns or float(np.median(rise_expected[cols])) < 1.5 * min_rise:
+        return None
+    ratio = (obs_before[cols] - obs_now[cols]) / rise_expected[cols]
+    return float(np.median(np.clip(ratio, -1.0, 2.0)) * 100.0)
+
+
+# ------------------------------------------------------- stage 3: comparison
+@dataclass
+class Comparison:
+    """Pixel sets of one comparison, (h, w) bool each, and their counts."""
+
+    missing: np.ndarray
+    extra: np.ndarray
+    expected_pixels: int
+    raw_diff_pixels: int
+    band_missing: int
+    band_extra: int
+    band_pixels: int
+    band_core_pixels: int
+
+
+def compare_masks(
+    observed: np.ndarray,
+    bed: np.ndarray,
+    expected: np.ndarray,
+    band: np.ndarray,
+    search: np.ndarray,
+    dont_care: np.ndarray,
+    tolerance: float,
+    band_reach: float,
+    flat_max_px: float = 1e9,
+    reflection: np.ndarray | None = None,
+) -> Comparison:
+    """Missing and extra material (see module docstring); all inputs (h, w) bool, already aligned.
+
+    missing = expected, farther than ``tolerance`` inside its outline, and confidently bed now
+    (an uncertain pixel is given the benefit of the doubt: no pause on missing evidence).
+    extra = observed material farther than ``tolerance`` outside the outline, inside ``search``
+    (blobs reaching 15 % or more beyond it, from above, are something else: the hotend, the gantry),
+    in blobs thicker than ~4 px that do not lie (80 % or more) inside ``dont_care``.
+    The band figures count missing pixels inside the newest band and extra pixels within
+    ``band_reach`` of it.
+    """
+    core = erode(expected, tolerance)
+    missing = core & bed & ~observed
+    missing = cv2.morphologyEx(missing.astype(np.uint8), cv2.MORPH_OPEN, _KERNEL3).astype(bool)
+    grown = dilate(expected, tolerance)
+    outside = observed & ~grown
+    if outside.any():
+        # Something reaching in from outside the search box (the parked hotend, the gantry, a hand)
+        # is not the print's: drop blobs with 15 % or more of their pixels beyond the box.
+        # Only what comes from above counts as foreign: a part sliding out sideways is the print's.
+        count, labels = cv2.connectedComponents(outside.astype(np.uint8), connectivity=8)
+        area = np.bincount(labels.ravel(), minlength=count)
+        beyond = np.bincount(labels.ravel(), weights=(~search).ravel().astype(np.float64), minlength=count)
+        ceiling = np.where(search.any(axis=0), np.argmax(search, axis=0), search.shape[0])
+        above = np.arange(search.shape[0])[:, None] < ceiling[None, :]
+        from_above = np.bincount(labels.ravel(), weights=above.ravel().astype(np.float64), minlength=count)
+        foreign = (beyond >= 0.15 * np.maximum(area, 1)) & (from_above >= 0.05 * np.maximum(area, 1))
+        foreign[0] = False
+        outside &= ~foreign[labels]
+    extra = (outside & search).astype(np.uint8)
+    # close first so a tangle of thin strands becomes one blob, then drop what is still thinner
+    # than ~5 px (strings, a skirt line softened by JPEG)
+    extra = cv2.morphologyEx(cv2.morphologyEx(extra, cv2.MORPH_CLOSE, _KERNEL3), cv2.MORPH_OPEN, _KERNEL5)
+    extra = extra.astype(bool) & ~grown
+    if extra.any():
+        # specks far smaller than the part are noise, not a failure (a real blob is a sizeable share)
+        count, labels, stats, _ = cv2.connectedComponentsWithStats(extra.astype(np.uint8), connectivity=8)
+        small = stats[:, cv2.CC_STAT_AREA] < max(30, 0.003 * int(expected.sum()))
+        small[0] = False
+        extra &= ~small[labels]
+    if (dont_care.any() or (reflection is not None and reflection.any())) and extra.any():
+        # a blob lying (almost) wholly where flat bed marks or reflections can appear is one of them;
+        # anything that also rises out of that zone (spaghetti, a moved part) counts in full
+        count, labels = cv2.connectedComponents(extra.astype(np.uint8), connectivity=8)
+        area = np.bincount(labels.ravel(), minlength=count)
+        inside = np.bincount(labels.ravel(), weights=dont_care.ravel().astype(np.float64), minlength=count)
+        # ... and thin: a part that slid 10 mm also sits in that zone, but stands far thicker
+        depth = cv2.distanceTransform(extra.astype(np.uint8), cv2.DIST_L2, 3)
+        thickness = np.zeros(count, np.float32)
+        np.maximum.at(thickness, labels.ravel(), depth.ravel())
+        flat = (inside >= 0.8 * np.maximum(area, 1)) & (2.0 * thickness <= flat_max_px)
+        if reflection is not None:
+            mirrored = np.bincount(labels.ravel(), weights=reflection.ravel().astype(np.float64), minlength=count)
+            flat |= mirrored >= 0.8 * np.maximum(area, 1)
+        flat[0] = False
+        extra &= ~flat[labels]
+    band_core = band & core
+    near_band = dilate(band, band_reach) & ~grown
+    return Comparison(
+        missing=missing,
+        extra=extra,
+        expected_pixels=int(expected.sum()),
+        raw_diff_pixels=int(np.count_nonzero(observed & search ^ expected & search)),
+        band_missing=int(np.count_nonzero(missing & band)),
+        band_extra=int(np.count_nonzero(extra & near_band)),
+        band_pixels=int(band.sum()),
+        band_core_pixels=int(band_core.sum()),
+    )
+
+
+# ------------------------------------------------------------- the whole check
+def check_shape(
+    camera: str,
+    background: np.ndarray,
+    frame: np.ndarray,
+    regions: ExpectedRegions,
+    *,
+    threshold: float = 7.0,
+    band_threshold: float = 50.0,
+    band_min_pixels: int = 150,
+    material_factor: float = 5.0,
+    bed_factor: float = 2.5,
+    max_changed_bed_fraction: float = 0.35,
+    layer_shift_mm: float = 1.5,
+    previous_offset_mm: float | None = None,
+    previous_mask: np.ndarray | None = None,
+    last_observed: np.ndarray | None = None,
+    anchor: tuple[int, int] | None = None,
+    max_drift: int = 2,
+    palette: np.ndarray | None = None,
+    keep_pictures: bool = True,
+) -> ShapeResult:
+    """Shape check of one camera (module docstring). Images (h, w, 3) uint8 BGR of the camera's size.
+
+    ``previous_mask``, ``anchor`` and ``palette`` carry what the previous checks of this camera
+    learnt (its last passing material mask, its alignment shift, the part's colours);
+    ``last_observed`` is the material mask of the previous check, for the growth test, and
+    ``previous_offset_mm`` its band offset: a layer shift persists (every later layer is printed
+    shifted), so an offset counts when it is seen twice in a row or is twice the limit.
+    """
+    h, w = regions.silhouette.shape
+    if frame.shape[:2] != (h, w):
+        frame = cv2.resize(frame, (w, h), interpolation=cv2.INTER_AREA)
+    if background.shape[:2] != (h, w):
+        background = cv2.resize(background, (w, h), interpolation=cv2.INTER_AREA)
+    expected_full = regions.silhouette.astype(bool)
+    shift_bound = int(np.ceil(regions.max_shift_px))
+    tol = float(regions.tolerance_px)
+    expected_pixels = int(expected_full.sum())
+    if expected_pixels == 0:
+        return ShapeResult(camera, 0.0, 0.0, 0.0, 0.0, None, None, 0, 0, None, None, (0, 0), threshold,
+                           band_threshold,
+                           passed=True, usable=False,
+                           reasons=[f"{camera}: the part is not in view at this height"])
+
+    # work on a crop around everything that matters, plus a margin of certain bed
+    box_s = bounding_box(regions.search)
+    box_e = bounding_box(expected_full, pad=int(shift_bound + 2 * tol + 6))
+    box = box_e if box_s is None else (min(box_s[0], box_e[0]), max(box_s[1], box_e[1]),
+                                       min(box_s[2], box_e[2]), max(box_s[3], box_e[3]))
+    pad = max(12, shift_bound)
+    box = (max(0, box[0] - pad), min(h, box[1] + pad), max(0, box[2] - pad), min(w, box[3] + pad))
+    y0, y1, x0, x1 = box
+    crop = (slice(y0, y1), slice(x0, x1))
+    expected = expected_full[crop]
+    band = regions.new_band[crop].astype(bool) & expected
+    search = regions.search[crop].astype(bool)
+    dont_care = regions.dont_care[crop].astype(bool)
+    # one distance transform gives every grown copy of the expected silhouette
+    distance = cv2.distanceTransform((~expected).astype(np.uint8), cv2.DIST_L2, 3)
+    prior = distance <= shift_bound + tol + 1
+    bed_sample = (distance > shift_bound + 2 * tol + 4) & ~dont_care
+    previous = None
+    if previous_mask is not None and previous_mask.shape == (h, w):
+        previous = previous_mask[crop]
+
+    evidence = material_evidence(background[crop], frame[crop], prior, bed_sample,
+                                 material_factor=material_factor, bed_factor=bed_factor, previous=previous)
+    observed = clean_mask(evidence.material, fill_like=distance <= shift_bound)
+    observed_strong = observed & evidence.strong
+    changed = evidence.changed_bed_fraction
+
+    # align on the cues shadows cannot fake when they show most of the part, else on everything;
+    # and on the part as it was at the previous check (where failures do not begin), so a runout or a
+    # shifted top cannot pull the alignment
+    anchor_mask = observed_strong if observed_strong.sum() >= 0.3 * expected.sum() else observed
+    older = expected & ~band
+    template = older if older.sum() >= 0.3 * expected.sum() else expected
+    dx, dy = align_expected(anchor_mask & prior, template, shift_bound, anchor=anchor, max_drift=max_drift,
+                            profile_of=expected if anchor is None else None)
+    expected_a = shift_mask(expected, dx, dy)
+    band_a = shift_mask(band, dx, dy)
+    # weak cues (darkening, texture) vouch for the part where it is expected, never for extra material
+    grown_a = shift_mask(distance <= tol, dx, dy)
+    observed = (observed & grown_a) | observed_strong
+    # the search box and the bed-marks zone come from the same calibration: they move with the alignment
+    search_a = shift_mask(search, dx, dy) | grown_a
+    dont_care_a = dilate(shift_mask(dont_care, dx, dy), tol)
+    reflection_a = (dilate(shift_mask(regions.reflection[crop].astype(bool), dx, dy), tol)
+                    if regions.reflection is not None else None)
+
+    # missing material is claimed only where the part, had it been there, would have been told apart
+    # from what the camera sees instead (a black part against a black backdrop cannot be missed)
+    core = erode(expected_a, tol)
+    seen_part = observed & core
+    palette_now = part_palette(frame[crop], seen_part) if seen_part.sum() >= 0.15 * max(core.sum(), 1) else None
+    palette_used = palette_now if palette_now is not None else palette
+    bed_evidence = evidence.bed.copy()
+    candidates = core & bed_evidence & ~observed
+    invisible_part = palette_used is None
+    if invisible_part:
+        bed_evidence[:] = False
+    elif candidates.any():
+        fraction = detectable_fraction(palette_used, evidence.background_norm[candidates], evidence.noise,
+                                       material_factor)
+        bed_evidence[candidates] = fraction >= 0.6
+    comparison = compare_masks(observed, bed_evidence, expected_a, band_a, search_a,
+                               dont_care_a, tol, band_reach=max(2 * tol, shift_bound),
+                               flat_max_px=regions.flat_max_px, reflection=reflection_a)
+
+    # Growth since the previous check: the same camera, the same processing, so calibration and
+    # alignment errors cancel; a part that stopped growing (runout, clog, spaghetti) shows none of the
+    # new band, even where the band is a thin crescent the absolute comparison cannot resolve.
+    growth_pct = None
+    if (last_observed is not None and last_observed.shape == (h, w)
+            and regions.previous_silhouette is not None):
+        before_a = shift_mask(regions.previous_silhouette[crop].astype(bool), dx, dy)
+        # only material within the expected outlines counts: strings and the hotend above the part
+        # must not make its top look higher than it is
+        growth_pct = profile_growth(observed & grown_a, last_observed[crop] & dilate(before_a, tol),
+                                    expected_a, before_a, min_rise=max(4.0, 2.0 * tol))
+
+    n = max(comparison.expected_pixels, 1)
+    missing_pct = 100.0 * int(comparison.missing.sum()) / n
+    extra_pct = 100.0 * int(comparison.extra.sum()) / n
+    error_pct = missing_pct + extra_pct
+    raw_error_pct = 100.0 * comparison.raw_diff_pixels / n
+    band_error = band_missing = band_offset_mm = None
+    if comparison.band_core_pixels >= band_min_pixels:
+        band_missing = 100.0 * comparison.band_missing / comparison.band_pixels
+        band_error = 100.0 * (comparison.band_missing + comparison.band_extra) / comparison.band_pixels
+        if regions.px_per_mm > 0:
+            offset_px = band_offset(observed, expected_a, band_a, int(np.ceil(8.0 * regions.px_per_mm)))
+            band_offset_mm = abs(offset_px) / regions.px_per_mm
+
+    reasons: list[str] = []
+    decisive = False
+    usable = changed <= max_changed_bed_fraction
+    if not usable:
+        reasons.append(f"{camera}: {changed:.0%} of the empty bed looks different from the background frame "
+                       f"(camera moved or lighting changed): no verdict from this camera")
+        passed = True
+    elif invisible_part and extra_pct <= threshold:
+        usable, passed = False, True
+        reasons.append(f"{camera}: the part cannot be told apart from the background in this view "
+                       f"(colour too close to the bed or backdrop): no verdict from this camera")
+    else:
+        passed = True
+        if error_pct > threshold:
+            passed = False
+            decisive = min(missing_pct, extra_pct) >= threshold / 3.0
+            kind = _describe(missing_pct, extra_pct)
+            reasons.append(f"{camera}: shape differs from the model by {error_pct:.1f}% "
+                           f"(limit {threshold:g}%): {kind}")
+        persistent = previous_offset_mm is not None and previous_offset_mm >= layer_shift_mm
+        if band_offset_mm is not None and band_offset_mm >= layer_shift_mm * (1.0 if persistent else 2.0):
+            passed, decisive = False, True
+            reasons.append(f"{camera}: the newest layers sit {band_offset_mm:.1f} mm sideways from the layers "
+                           f"below (layer shift? limit {layer_shift_mm:g} mm)")
+        if band_error is not None and band_error > band_threshold:
+            passed = False
+            what = "missing" if band_missing >= band_error - band_missing else "displaced"
+            reasons.append(f"{camera}: the newest layers are {band_error:.0f}% {what} "
+                           f"(limit {band_threshold:g}%)")
+
+    observed_full = np.zeros((h, w), bool)
+    observed_full[crop] = observed
+    result = ShapeResult(
+        camera=camera, error_pct=error_pct, raw_error_pct=raw_error_pct, missing_pct=missing_pct,
+        extra_pct=extra_pct, band_error_pct=band_error, band_missing_pct=band_missing,
+        band_pixels=comparison.band_pixels, expected_pixels=comparison.expected_pixels,
+        band_offset_mm=band_offset_mm, growth_pct=growth_pct, shift_px=(dx, dy),
+        threshold=float(threshold), band_threshold=float(band_threshold), passed=passed, usable=usable,
+        reasons=reasons, changed_bed_fraction=changed, observed_mask=observed_full, palette=palette_now,
+        decisive=decisive,
+    )
+    if keep_pictures:
+        full = np.zeros((h, w), bool)
+        result._frame = frame
+        result._expected = _paste(full, crop, expected_a)
+        result._missing = _paste(full, crop, comparison.missing)
+        result._extra = _paste(full, crop, comparison.extra)
+    return result
+
+
+def _paste(template: np.ndarray, crop, part: np.ndarray) -> np.ndarray:
+    out = np.zeros_like(template)
+    out[crop] = part
+    return out
+
+
+def _describe(missing_pct: float, extra_pct: float) -> str:
+    if missing_pct >= 2 * extra_pct:
+        return f"material missing ({missing_pct:.1f}% of the expected part: runout, clog or stopped print?)"
+    if extra_pct >= 2 * missing_pct:
+        return f"unexpected material ({extra_pct:.1f}%: spaghetti, blob or moved part?)"
+    return (f"part displaced ({missing_pct:.1f}% missing, {extra_pct:.1f}% extra: "
+            f"layer shift or detached part?)")
+
+
+# ------------------------------------------------------------------ pictures
+MISSING_BGR = (40, 40, 230)     # red
+EXTRA_BGR = (230, 60, 230)      # magenta
+OUTLINE_BGR = (0, 230, 255)     # yellow
+OBSERVED_BGR = (60, 200, 60)    # green
+
+
+def draw_overlay(frame: np.ndarray, observed: np.ndarray | None, expected: np.ndarray | None,
+                 missing: np.ndarray | None, extra: np.ndarray | None, label: str = "") -> np.ndarray:
+    """(h, w, 3) uint8 picture explaining a check (colours above); inputs (h, w) bool or None."""
+    out = (frame.astype(np.float32) * 0.6)
+    for mask, colour, alpha in ((observed, OBSERVED_BGR, 0.25), (missing, MISSING_BGR, 0.7),
+                                (extra, EXTRA_BGR, 0.7)):
+        if mask is not None and mask.any():
+            out[mask] = out[mask] * (1 - alpha) + np.array(colour, np.float32) * alpha
+    out = np.clip(out, 0, 255).astype(np.uint8)
+    if expected is not None and expected.any():
+        contours, _ = cv2.findContours(expected.astype(np.uint8), cv2.RETR_LIST, cv2.CHAIN_APPROX_SIMPLE)
+        cv2.drawContours(out, contours, -1, OUTLINE_BGR, 1, cv2.LINE_AA)
+    if label:
+        scale = max(0.4, out.shape[1] / 1400)
+        cv2.putText(out, label, (8, int(22 * scale / 0.45)), cv2.FONT_HERSHEY_SIMPLEX, scale, (0, 0, 0), 3,
+                    cv2.LINE_AA)
+        cv2.putText(out, label, (8, int(22 * scale / 0.45)), cv2.FONT_HERSHEY_SIMPLEX, scale,
+                    (255, 255, 255), 1, cv2.LINE_AA)
+    return out

@@ -1,0 +1,703 @@
+"""The two-camera size check: width at the current print height and printed height, in millimetres.
+
+Per pair and check (seed section 5.3.3.2, "horizontal and vertical magnitude"; details and
+measured figures in ``docs/stereo.md``):
+
+1. undo the calibration error at the part: frames and masks are moved back by the image shift
+   the shape check measured per camera (else stabilised onto the empty-bed frames);
+2. rectify the pair into a window around the part (:mod:`.rectify`);
+3. height from the part's outline: silhouette-edge stereo on the rectified rows, edges placed at
+   half contrast against the empty bed, steep outline only;
+4. width across the pair's line of sight at the current height: the shorter of the outline's
+   span and the extent of the densely matched points (:mod:`.matching`, :mod:`.triangulate`);
+5. compare with the model: ``error_pct`` is the larger relative error beyond what the pair's
+   calibration can explain; 100 % when the part is reconstructed but nothing at the current
+   height (the rule that made the seed's detection 100 %).
+
+It abstains (``error_pct`` None, never a pause) when the evidence is missing: a frame missing,
+the part's top outside a view or too low to measure, untrusted rectification, too few outline
+points.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from ..camera import Camera
+from .matching import MATCHERS, MatchSettings, compute_disparity
+from .rectify import (RECTIFICATIONS, Rectification, align_on_bed, phase_shift, predict_disparity_range,
+                      rectify_calibrated, rectify_seed, rectify_uncalibrated, refine_vertical, sift_matches)
+from .triangulate import seed_triangulate_cameras, triangulate_general
+
+TRIANGULATIONS = ("general", "seed")
+#: 'rims': silhouette-edge stereo on rectified rows; 'dense': the matcher's points (the seed's way);
+#: 'hybrid': height from the rims, width the shorter of the two.
+MEASURES = ("hybrid", "rims", "dense")
+#: Default block side per matcher (SGBM aggregates along paths, so its block is small).
+DEFAULT_BLOCK = {"sad": 15, "ssd": 15, "ncc": 15, "sgbm": 5}
+
+
+@dataclass
+class SizeSettings:
+    """How the size check runs; defaults are the measured best (docs/stereo.md).
+
+    rectification : 'calibrated' | 'uncalibrated' | 'seed'.
+    matcher : 'sad' | 'ssd' | 'ncc' | 'sgbm'; block_size 0 means :data:`DEFAULT_BLOCK`.
+    triangulation : 'general' (cv2.triangulatePoints) | 'seed' (Eqs. 2-2..2-14).
+    threshold_pct : the seed's 10 %.
+    band_mm : the width is measured over the top ``band_mm`` below the current height.
+    min_points : 'dense' abstains with fewer reconstructed points over the footprint.
+    min_band_points : fewer matched points in the band give no dense width.
+    bed_reference : align the right camera's window on the empty bed (calibrated rectification only).
+    measure : 'hybrid' (default: height from the outline, width the shorter of outline and matched
+        points), 'rims' (silhouette-edge stereo only) or 'dense' (the matcher's points only, as the seed).
+    min_height_px : below this many pixels of printed height in a view, the pair abstains.
+    width_tolerance_pct : width error a user's calibration (1 % focal, 0.5 degree) explains; with two
+        pixels of silhouette edge and the height tolerance (0.5 degree at the part's distance + 1 mm)
+        it is subtracted before the error is held against the print (``error_pct``).
+    """
+
+    rectification: str = "calibrated"
+    matcher: str = "sgbm"
+    triangulation: str = "general"
+    block_size: int = 0
+    threshold_pct: float = 10.0
+    band_mm: float = 1.5
+    min_points: int = 300
+    min_band_points: int = 25
+    bed_reference: bool = True
+    measure: str = "hybrid"
+    min_height_px: float = 24.0
+    width_tolerance_pct: float = 2.0
+
+    def __post_init__(self) -> None:
+        if self.rectification not in RECTIFICATIONS:
+            raise ValueError(f"unknown rectification {self.rectification!r}; choose one of {', '.join(RECTIFICATIONS)}")
+        if self.matcher not in MATCHERS:
+            raise ValueError(f"unknown matcher {self.matcher!r}; choose one of {', '.join(MATCHERS)}")
+        if self.measure not in MEASURES:
+            raise ValueError(f"unknown measurement {self.measure!r}; choose one of {', '.join(MEASURES)}")
+        if self.triangulation not in TRIANGULATIONS:
+            raise ValueError(f"unknown triangulation {self.triangulation!r}; choose one of {', '.join(TRIANGULATIONS)}")
+
+    @property
+    def block(self) -> int:
+        return int(self.block_size or DEFAULT_BLOCK[self.matcher])
+
+
+@dataclass
+class SizeResult:
+    """The size check of one pair at one check; ``to_dict`` is the ``size`` entry of ``evaluate``."""
+
+    pair: str
+    width_mm: float | None
+    height_mm: float | None
+    expected_width_mm: float | None
+    expected_height_mm: float | None
+    error_pct: float | None
+    width_error_pct: float | None = None
+    height_error_pct: float | None = None
+    abstained: bool = False
+    reason: str = ""
+    threshold_pct: float = 10.0
+    n_points: int = 0
+    seconds: float = 0.0
+    rectification: dict = field(default_factory=dict)
+    points: np.ndarray | None = field(default=None, repr=False)  # (n, 3) printer points
+
+    @property
+    def failed(self) -> bool:
+        return (not self.abstained) and self.error_pct is not None and self.error_pct > self.threshold_pct
+
+    def to_dict(self) -> dict:
+        def r(v, nd=2):
+            return None if v is None else round(float(v), nd)
+
+        return {"width_mm": r(self.width_mm), "height_mm": r(self.height_mm),
+                "expected_width_mm": r(self.expected_width_mm), "expected_height_mm": r(self.expected_height_mm),
+                "error_pct": r(self.error_pct), "width_error_pct": r(self.width_error_pct),
+                "height_error_pct": r(self.height_error_pct), "abstained": self.abstained, "reason": self.reason,
+                "threshold_pct": self.threshold_pct, "points": self.n_points, "seconds": r(self.seconds, 3),
+                "rectification": self.rectification}
+
+
+# ------------------------------------------------------------------ geometry
+def width_direction(left: Camera, right: Camera) -> np.ndarray:
+    """(2,) unit bed-plane direction across the pair's line of sight (perpendicular to the mean view)."""
+    view = left.viewing_direction + right.viewing_direction
+    xy = view[:2] / max(np.linalg.norm(view[:2]), 1e-12)
+    return np.array([xy[1], -xy[0]])
+
+
+def section_extent(mesh, z: float, direction: np.ndarray) -> tuple[float, float] | None:
+    """(min, max) of the part's cross-section at height ``z`` along the unit bed direction; None if empty."""
+    from trimesh.intersections import mesh_plane
+
+    segments = mesh_plane(mesh, [0.0, 0.0, 1.0], [0.0, 0.0, float(z)])
+    if len(segments) == 0:
+        return None
+    t = segments.reshape(-1, 3)[:, :2] @ np.asarray(direction, np.float64)
+    return float(t.min()), float(t.max())
+
+
+def expected_width(mesh, z: float, direction: np.ndarray, band_mm: float) -> float | None:
+    """Extent along ``direction`` of the part between ``z - band_mm`` and ``z`` (what the band can show)."""
+    top = float(mesh.bounds[1, 2])
+    hi = min(z, top) - 0.05
+    lows, highs = [], []
+    for h in np.linspace(max(hi - band_mm, 0.05), hi, 5):
+        extent = section_extent(mesh, h, direction)
+        if extent is not None:
+            lows.append(extent[0])
+            highs.append(extent[1])
+    if not lows:
+        return None
+    return max(highs) - min(lows)
+
+
+def _grow_polygon(polygon: np.ndarray, margin: float) -> np.ndarray:
+    angles = np.linspace(0, 2 * np.pi, 16, endpoint=False)
+    ring = np.column_stack([np.cos(angles), np.sin(angles)]) * margin
+    grown = (np.asarray(polygon)[:, None, :] + ring[None]).reshape(-1, 2)
+    return cv2.convexHull(grown.astype(np.float32)).reshape(-1, 2).astype(np.float64)
+
+
+def _inside_polygon(polygon: np.ndarray, xy: np.ndarray, res: float = 0.25) -> np.ndarray:
+    """(n,) bool: which (n, 2) bed points lie inside the convex polygon (rasterised at ``res`` mm)."""
+    lo = polygon.min(axis=0) - 1
+    size = np.ceil((polygon.max(axis=0) + 1 - lo) / res).astype(int) + 1
+    grid = np.zeros((size[1], size[0]), np.uint8)
+    cv2.fillPoly(grid, [np.round((polygon - lo) / res).astype(np.int32)], 1)
+    ij = np.round((xy - lo) / res).astype(int)
+    ok = (ij[:, 0] >= 0) & (ij[:, 0] < size[0]) & (ij[:, 1] >= 0) & (ij[:, 1] < size[1])
+    out = np.zeros(len(xy), bool)
+    out[ok] = grid[ij[ok, 1], ij[ok, 0]] > 0
+    return out
+
+
+def _box_points(footprint: np.ndarray, z0: float, z1: float, margin: float) -> np.ndarray:
+    ring = _grow_polygon(footprint, margin)
+    return np.vstack([np.column_stack([ring, np.full(len(ring), z)]) for z in (z0, z1)])
+
+
+def _roi(camera: Camera, points: np.ndarray, pad: int = 12):
+    uv = camera.project(points)
+    uv = uv[np.all(np.isfinite(uv), axis=1)]
+    if len(uv) == 0:
+        return None
+    x0, y0 = np.floor(uv.min(axis=0)) - pad
+    x1, y1 = np.ceil(uv.max(axis=0)) + pad
+    x0, y0 = max(x0, 0), max(y0, 0)
+    x1, y1 = min(x1, camera.width - 1), min(y1, camera.height - 1)
+    if x1 <= x0 or y1 <= y0:
+        return None
+    return (int(x0), int(y0), int(x1), int(y1))
+
+
+def _in_view(camera: Camera, points: np.ndarray) -> bool:
+    uv = camera.project(points)
+    return bool(np.all(np.isfinite(uv)) and np.all((uv >= 0) & (uv <= [camera.width - 1, camera.height - 1])))
+
+
+def _fill_hull(camera: Camera, points: np.ndarray) -> np.ndarray:
+    mask = np.zeros((camera.height, camera.width), np.uint8)
+    uv = camera.project(points)
+    uv = uv[np.all(np.isfinite(uv), axis=1)]
+    if len(uv) >= 3:
+        cv2.fillConvexPoly(mask, cv2.convexHull(np.round(np.clip(uv, -5000, 5000)).astype(np.int32)), 1)
+    return mask.astype(bool)
+
+
+# ------------------------------------------------------------------- the check
+class PairSizeCheck:
+    """The size check of one stereo pair over one print; keeps the per-job rectification and bed reference.
+
+    Parameters
+    ----------
+    left, right : the pair's calibrated cameras.
+    mesh : the expected part (trimesh.Trimesh, printer coordinates).
+    footprint : (n, 2) convex hull of the part on the bed (mm).
+    background_left, background_right : empty-bed frames (distorted, BGR), optional but recommended.
+    """
+
+    def __init__(self, left: Camera, right: Camera, mesh, footprint: np.ndarray,
+                 settings: SizeSettings | None = None, background_left: np.ndarray | None = None,
+                 background_right: np.ndarray | None = None):
+        self.left, self.right = left, right
+        self.mesh = mesh
+        self.footprint = np.asarray(footprint, np.float64)
+        self.settings = settings or SizeSettings()
+        self.background = (background_left, background_right)
+        self.key = f"{left.name}+{right.name}"
+        self.direction = width_direction(left, right)
+        self.top = float(mesh.bounds[1, 2])
+        self._rect: Rectification | None = None
+        self._rect_plain: Rectification | None = None
+        self._bed_note = ""
+        box = _box_points(self.footprint, 0.0, self.top + 3.0, 6.0)
+        self.roi_left, self.roi_right = _roi(left, box), _roi(right, box)
+        centre = np.array([*self.footprint.mean(axis=0), self.top / 2])
+        distance = float(np.mean([np.linalg.norm(c.center - centre) for c in (left, right)]))
+        #: How far above the current height a point may triangulate from calibration error alone
+        #: (0.5 degree at the part's distance, plus a millimetre).
+        self.z_tolerance = distance * np.tan(np.radians(0.5)) + 1.0
+        #: Millimetres per pixel at the part (a silhouette edge is good to about a pixel or two).
+        self.px_mm = distance / float(np.mean([left.K[0, 0], right.K[0, 0]]))
+
+    # -------------------------------------------------------- rectification
+    def _region_masks(self) -> tuple[np.ndarray, np.ndarray]:
+        box = _box_points(self.footprint, 0.0, self.top + 3.0, 25.0)
+        bed = _box_points(self.footprint, 0.0, 0.0, 40.0)
+        return (_fill_hull(self.left, box) | _fill_hull(self.left, bed),
+                _fill_hull(self.right, box) | _fill_hull(self.right, bed))
+
+    def rectification(self, frame_left: np.ndarray, frame_right: np.ndarray, *,
+                      aligned: bool = False) -> Rectification:
+        """The pair's rectification. ``aligned``: the frames were already moved back by the calibration
+        error measured on the part, so the calibrated rectification is used as is (refining it on the
+        bed as well would correct the same error twice)."""
+        method = self.settings.rectification
+        if method == "calibrated" and aligned:
+            if self._rect_plain is None:
+                self._rect_plain = rectify_calibrated(self.left, self.right, roi_left=self.roi_left,
+                                                      roi_right=self.roi_right)
+            return self._rect_plain
+        if method == "calibrated":
+            if self._rect is None:
+                rect = rectify_calibrated(self.left, self.right, roi_left=self.roi_left, roi_right=self.roi_right)
+                bg_left, bg_right = self.background
+                applied = False
+                if self.settings.bed_reference and bg_left is not None and bg_right is not None:
+                    bed = _fill_hull(self.left, _box_points(self.footprint, 0.0, 0.0, 50.0)).astype(np.uint8)
+                    bed_w = rect.warp(bed, "left", interpolation=cv2.INTER_NEAREST) > 0
+                    applied, self._bed_note = align_on_bed(rect, bg_left, bg_right, bed_w)
+                if not applied:
+                    source = (bg_left, bg_right) if bg_left is not None and bg_right is not None \
+                        else (frame_left, frame_right)
+                    matches = sift_matches(source[0], source[1], self.left, self.right, *self._region_masks(),
+                                           ransac=False)
+                    rect = refine_vertical(rect, matches)
+                self._rect = rect
+            return self._rect
+        masks = self._region_masks()
+        matches = sift_matches(frame_left, frame_right, self.left, self.right, *masks)
+        if method == "uncalibrated":
+            return rectify_uncalibrated(self.left, self.right, matches, roi_left=self.roi_left,
+                                        roi_right=self.roi_right)
+        return rectify_seed(self.left, self.right, matches, roi_left=self.roi_left, roi_right=self.roi_right)
+
+    def stabilise(self, frame: np.ndarray, which: str) -> np.ndarray:
+        """The frame moved back onto its empty-bed frame (webcams shake by a pixel or two per frame)."""
+        background = self.background[0 if which == "left" else 1]
+        if background is None or background.shape != frame.shape:
+            return frame
+        cam = self.left if which == "left" else self.right
+        busy = _fill_hull(cam, _box_points(self.footprint, 0.0, self.top + 10.0, 15.0))
+        shift, response = phase_shift(background, frame, ~busy)
+        if response < 0.05 or np.any(np.abs(shift) > 8) or np.all(np.abs(shift) < 0.1):
+            return frame
+        move = np.float32([[1, 0, -shift[0]], [0, 1, -shift[1]]])
+        return cv2.warpAffine(frame, move, (frame.shape[1], frame.shape[0]), flags=cv2.INTER_LINEAR,
+                              borderMode=cv2.BORDER_REPLICATE)
+
+    # -------------------------------------------------------------- measure
+    def measure(self, frame_left: np.ndarray, frame_right: np.ndarray, z: float, *,
+                mask_left: np.ndarray | None = None, mask_right: np.ndarray | None = None,
+                shift_left=None, shift_right=None, keep_points: bool = False) -> SizeResult:
+        """Measure the pair at print height ``z`` (mm).
+
+        ``mask_left``/``mask_right``: the observed part (full distorted frame, bool), e.g. the shape
+        check's; computed from the empty-bed frames when not given.
+        ``shift_left``/``shift_right``: (dx, dy) px by which the shape check found the observed part
+        displaced from the part rendered with the calibrated camera (calibration error plus shake,
+        bounded and frozen once the part is tall enough, so a failing print cannot pull it). When
+        given, frames and masks are moved back by it, which removes most of the pair's calibration
+        error at the part; otherwise each frame is only stabilised onto its empty-bed frame.
+        """
+        started = time.perf_counter()
+        s = self.settings
+        exp_width = expected_width(self.mesh, z, self.direction, s.band_mm)
+        exp_height = float(min(z, self.top))
+        result = SizeResult(self.key, None, None, exp_width, exp_height, None, threshold_pct=s.threshold_pct)
+
+        def abstain(reason: str) -> SizeResult:
+            result.abstained, result.reason = True, reason
+            result.seconds = time.perf_counter() - started
+            return result
+
+        top_ring = _box_points(self.footprint, z, z, 0.0)
+        for cam in (self.left, self.right):
+            if not _in_view(cam, top_ring):
+                return abstain(f"{cam.name}: the part's top at z={z:g} mm is outside the picture")
+        if frame_left is None or frame_right is None:
+            return abstain("a camera of the pair gave no frame")
+        centre = np.array([*self.footprint.mean(axis=0), 0.0])
+        for cam in (self.left, self.right):
+            foot, head = cam.project(np.array([centre, centre + [0.0, 0.0, z]]))
+            if np.linalg.norm(head - foot) < s.min_height_px:
+                return abstain(f"{cam.name}: the part is only {np.linalg.norm(head - foot):.0f} px tall in the "
+                               f"picture, too low to measure yet")
+        frame_left, frame_right = _to_size(frame_left, self.left), _to_size(frame_right, self.right)
+        # |frame - empty bed| per view, for locating silhouette edges at half contrast
+        diffs = [_difference(frame, bg) for frame, bg in zip((frame_left, frame_right), self.background)]
+        if shift_left is not None and shift_right is not None:
+            frame_left, mask_left = _moved(frame_left, mask_left, shift_left)
+            frame_right, mask_right = _moved(frame_right, mask_right, shift_right)
+            diffs = [None if d is None else _moved(d, None, sh)[0] for d, sh in zip(diffs, (shift_left, shift_right))]
+            self.aligned_on_part = True
+            # Aligned on the part: what remains is a pixel or two and the focal-length error.
+            tol_z = min(self.z_tolerance, 1.0 + 2.0 * self.px_mm)
+        else:
+            tol_z = self.z_tolerance
+            frame_left = self.stabilise(frame_left, "left")
+            frame_right = self.stabilise(frame_right, "right")
+            self.aligned_on_part = False
+
+        rect = self.rectification(frame_left, frame_right, aligned=self.aligned_on_part)
+        result.rectification = rect.summary()
+        result.rectification["aligned_on_part"] = self.aligned_on_part
+        if self._bed_note and not self.aligned_on_part:
+            result.rectification["bed_reference"] = self._bed_note
+        if not rect.trusted:
+            return abstain(f"rectification not trusted: {rect.reason}")
+
+        # The observed part in each view: the shape check's masks when given, else background difference.
+        region_left = _fill_hull(self.left, _box_points(self.footprint, 0.0, z + tol_z + 1.0, 4.0))
+        region_right = _fill_hull(self.right, _box_points(self.footprint, 0.0, z + tol_z + 1.0, 4.0))
+        if mask_left is None and self.background[0] is not None:
+            mask_left = foreground_mask(self.background[0], frame_left, region_left)
+        if mask_right is None and self.background[1] is not None:
+            mask_right = foreground_mask(self.background[1], frame_right, region_right)
+        mask_left = _clean_mask(mask_left, region_left)
+        mask_right = _clean_mask(mask_right, region_right)
+        if s.measure != "dense" and (mask_left is None or mask_right is None):
+            return abstain("no observed silhouette in both views (background frames missing?)")
+
+        wl, wr = rect.warp(frame_left, "left"), rect.warp(frame_right, "right")
+        if rect.method == "calibrated":
+            dmin, dmax = predict_disparity_range(rect, _box_points(self.footprint, 0.0, z + 2.0, 6.0),
+                                                 margin_px=8 + rect.K_rect[0, 0] * np.tan(np.radians(1.0)))
+        else:
+            dmin, dmax = rect.disparity_range
+        triangulate = seed_triangulate_cameras if s.triangulation == "seed" else triangulate_general
+
+        def to_printer(x_left, y, x_right):
+            pl = rect.to_camera_pixels(np.column_stack([x_left, y]).astype(np.float64), "left")
+            pr = rect.to_camera_pixels(np.column_stack([x_right, y]).astype(np.float64), "right")
+            return triangulate(self.left, self.right, pl, pr)
+
+        def in_volume(points, margin=4.0):
+            ok = np.all(np.isfinite(points), axis=1)
+            ok[ok] = _inside_polygon(_grow_polygon(self.footprint, margin), points[ok, :2]) & \
+                (points[ok, 2] > 0.3) & (points[ok, 2] < z + tol_z)
+            return ok
+
+        rim_height = rim_width = dense_height = dense_width = None
+        rim_any = dense_any = False
+        height_uncertain = width_uncertain = False
+        if s.measure in ("rims", "hybrid") and mask_left is not None and mask_right is not None:
+            # Silhouette-edge stereo: on each rectified row, the part's left and right outline in one
+            # view matches the same outline in the other (the epipolar plane cuts the part's outline in
+            # the same two points where both views share them), so the outline's depth needs no texture.
+            fl_w = rect.warp(mask_left.astype(np.float32), "left")
+            fr_w = rect.warp(mask_right.astype(np.float32), "right")
+            rows, a_l, b_l, a_r, b_r = silhouette_rims(fl_w, fr_w)
+            if diffs[0] is not None and diffs[1] is not None:
+                dl, dr = rect.warp(diffs[0], "left"), rect.warp(diffs[1], "right")
+                a_l, b_l = half_contrast_edges(dl, rows, a_l, +1), half_contrast_edges(dl, rows, b_l, -1)
+                a_r, b_r = half_contrast_edges(dr, rows, a_r, +1), half_contrast_edges(dr, rows, b_r, -1)
+            if len(rows) < 4:
+                return abstain("the part's outline is not seen on common rows by both cameras")
+            if not (dmin - 20 <= np.median(a_l - a_r) <= dmax + 20):
+                return abstain("the two silhouettes do not correspond (disparity out of range)")
+            # Where the outline runs along the rows (the top and bottom of the silhouette) its match is
+            # ill-posed: a row error of a pixel moves it by many pixels. Keep steep outline only. Each
+            # outline point stands on its own: rows may cut the part obliquely when the baseline tilts.
+            steep_a = _steep(a_l, rows) & _steep(a_r, rows)
+            steep_b = _steep(b_l, rows) & _steep(b_r, rows)
+            rims = np.vstack([to_printer(a_l[steep_a], rows[steep_a], a_r[steep_a]),
+                              to_printer(b_l[steep_b], rows[steep_b], b_r[steep_b])])
+            side = np.r_[np.zeros(int(steep_a.sum()), int), np.ones(int(steep_b.sum()), int)]
+            # Tangent rays of different edges (a box's corners) meet outside the part: the outline is
+            # gated loosely around the footprint for the height, tightly for the width.
+            kept = in_volume(rims, margin=12.0)
+            rims, side = rims[kept], side[kept]
+            result.n_points = len(rims)
+            if keep_points:
+                result.points = rims
+            if len(rims) < 8:
+                return abstain(f"only {len(rims)} outline points reconstructed over the part")
+            # Printed height: the top of the part's steep outline (its top corners).
+            rim_height = dense_top(rims[:, 2], window_mm=0.5, min_count=5)
+            in_band = (rims[:, 2] >= z - s.band_mm - tol_z) & (rims[:, 2] <= z + tol_z) & \
+                _inside_polygon(_grow_polygon(self.footprint, 4.0), rims[:, :2])
+            rim_any = bool(in_band.any())
+            # A width needs both sides of the outline at this height.
+            if min((in_band & (side == 0)).sum(), (in_band & (side == 1)).sum()) >= 2:
+                rim_width = _robust_span(rims[in_band, :2] @ self.direction)
+        if s.measure in ("dense", "hybrid"):
+            region = region_left
+            if mask_left is not None:
+                region = region_left & (cv2.dilate(mask_left.astype(np.uint8), np.ones((9, 9), np.uint8)) > 0)
+            region_w = rect.warp(region.astype(np.uint8), "left", interpolation=cv2.INTER_NEAREST) > 0
+            settings = MatchSettings(s.matcher, dmin, max(dmax - dmin, 16), s.block)
+            disparity = compute_disparity(wl, wr, settings, region_w) if region_w.any() else None
+            if disparity is not None and mask_left is not None:
+                # Every pixel of the observed part gets a depth, as in the seed (which matched every ROI
+                # pixel): its own match, or the nearest match along its row; the edges then come from
+                # the silhouette, sharper than any block matcher's depth edge.
+                part_w = rect.warp(mask_left.astype(np.uint8), "left", interpolation=cv2.INTER_NEAREST) > 0
+                disparity = fill_along_rows(disparity, part_w, max_gap=max(12, 2 * s.block))
+            points = np.zeros((0, 3))
+            if disparity is not None:
+                ys, xs = np.nonzero(np.isfinite(disparity))
+                d = disparity[ys, xs].astype(np.float64)
+                points = to_printer(xs, ys, xs - d)
+                points = points[in_volume(points)]
+            if s.measure == "dense":
+                result.n_points = len(points)
+                if keep_points:
+                    result.points = points
+                if len(points) < s.min_points:
+                    return abstain(f"only {len(points)} points reconstructed over the part")
+            if len(points) >= s.min_points:
+                dense_height = dense_top(points[:, 2], window_mm=0.5, min_count=max(8, len(points) // 500))
+                band = points[(points[:, 2] >= z - s.band_mm - tol_z) & (points[:, 2] <= z + tol_z)]
+                dense_any = len(band) > 0
+                if len(band) >= s.min_band_points:
+                    dense_width = robust_extent(band[:, :2] @ self.direction)
+        if s.measure == "rims":
+            height, width, anything = rim_height, rim_width, rim_any
+        elif s.measure == "dense":
+            height, width, anything = dense_height, dense_width, dense_any
+        else:
+            # Hybrid. Height from the outline; but the outline's top can read low when little of the
+            # outline near the top is steep (a twisted or ridged part), so a low outline counts
+            # against the print only when the matched points agree that the top is low.
+            height = rim_height
+            if rim_height is not None and dense_height is not None and dense_height - rim_height > tol_z:
+                height_uncertain = True
+            # Width: both err long, each its own way: the outline where the two views see different
+            # edges (tangent rays meet outside a box's corner), the matched points where mismatches
+            # scatter sideways: the shorter of the two.
+            # Either can also fall short where one side is poorly seen (dark filament on a dark bed),
+            # so the width counts against the print only when the two agree.
+            widths = [w for w in (dense_width, rim_width) if w]
+            width = min(widths) if widths else None
+            width_uncertain = len(widths) < 2 or abs(widths[0] - widths[1]) > \
+                max(0.03 * (exp_width or widths[0]), 4.0 * self.px_mm)
+            anything = rim_any or dense_any
+        if height is None:
+            return abstain("no observed silhouette in both views (background frames missing?)")
+        result.height_mm = height
+        result.height_error_pct = 100.0 * abs(height - exp_height) / max(exp_height, 1e-6)
+        # What counts towards a pause is the error beyond what the pair's own calibration can cause.
+        terms = [] if height_uncertain else [100.0 * max(0.0, abs(height - exp_height) - tol_z) / max(exp_height, 1e-6)]
+        if not anything:
+            result.width_mm = 0.0
+            result.width_error_pct = 100.0
+            result.error_pct = 100.0
+            result.reason = f"nothing reconstructed at the current height (top found at {height:.1f} mm)"
+        elif width is None:
+            result.error_pct = max(terms) if terms else None
+            result.abstained = not terms
+            result.reason = "width not measured at this height (one side of the outline unseen)"
+        else:
+            result.width_mm = width
+            if exp_width is not None and exp_width >= 3.0:
+                result.width_error_pct = 100.0 * abs(width - exp_width) / exp_width
+                tolerance = exp_width * s.width_tolerance_pct / 100.0 + self.px_mm * 2.0
+                if not width_uncertain:
+                    terms.append(100.0 * max(0.0, abs(width - exp_width) - tolerance) / exp_width)
+                else:
+                    result.reason = "width uncertain: the outline and the matched points disagree"
+            result.error_pct = max(terms) if terms else None
+            result.abstained = not terms
+        if height_uncertain:
+            result.reason = (result.reason + "; " if result.reason else "") + \
+                "height uncertain: the outline's top and the matched points disagree"
+        result.seconds = time.perf_counter() - started
+        return result
+
+
+def half_contrast_edges(diff: np.ndarray, rows: np.ndarray, x: np.ndarray, inward: int, reach: int = 8) -> np.ndarray:
+    """Move silhouette edge positions to where the frame's difference from the empty bed is half way
+    between the bed's and the part's, along each row.
+
+    A background-removal mask marks everything detectably different from the bed, which puts its edge
+    out in the blur's tail (a pixel or two per side, several percent of a small part's width). The
+    half-contrast point of the blurred step is where the edge really is.
+
+    diff : (h, w) float, |frame - background| in the same window; rows, x : (k,) edge positions;
+    inward : +1 when the part lies to the right of the edge (a left edge), -1 otherwise.
+    """
+    h, w = diff.shape
+    if len(x) == 0:
+        return x
+    k = np.arange(-reach, reach + 1)
+    cols = np.clip(np.round(x)[:, None].astype(int) + inward * k[None, :], 0, w - 1)
+    profile = diff[np.clip(rows, 0, h - 1)[:, None], cols]  # (n, 2 reach + 1), inward to the right
+    outside = np.median(profile[:, : reach // 2], axis=1)
+    inside = np.median(profile[:, -reach // 2:], axis=1)
+    half = 0.5 * (outside + inside)
+    above = profile >= half[:, None]
+    # the outermost position from which the profile stays above half towards the inside
+    run = np.flip(np.cumprod(np.flip(above, axis=1), axis=1), axis=1).astype(bool)
+    first = np.argmax(run, axis=1)
+    ok = run.any(axis=1) & (first > 0) & (inside - outside > 6.0)
+    lo = profile[np.arange(len(x)), np.maximum(first - 1, 0)]
+    hi = profile[np.arange(len(x)), first]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        frac = np.clip((half - lo) / (hi - lo), 0.0, 1.0)
+    offset = (first - 1 + frac) - reach  # in k units from the original edge, inward positive
+    return np.where(ok, np.round(x) + inward * offset, x)
+
+
+def silhouette_rims(left: np.ndarray, right: np.ndarray, min_run_px: int = 3):
+    """Sub-pixel left and right outline of two rectified soft masks ((h, w) float in [0, 1]) per common row.
+
+    Returns ``(rows, a_left, b_left, a_right, b_right)``: for each row seen by both, the leftmost
+    (a) and rightmost (b) x where each mask crosses 0.5.
+    """
+    def edges(mask):
+        inside = mask >= 0.5
+        has = inside.sum(axis=1) >= min_run_px
+        h, w = mask.shape
+        first = np.argmax(inside, axis=1)
+        last = w - 1 - np.argmax(inside[:, ::-1], axis=1)
+        rows = np.arange(h)
+
+        def crossing(col, step):
+            prev = np.clip(col - step, 0, w - 1)
+            v0, v1 = mask[rows, prev], mask[rows, col]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                frac = np.where(np.abs(v1 - v0) > 1e-6, (0.5 - v0) / (v1 - v0), 1.0)
+            return prev + step * np.clip(frac, 0.0, 1.0)
+
+        return has, crossing(first, 1), crossing(last, -1)
+
+    has_l, a_l, b_l = edges(left)
+    has_r, a_r, b_r = edges(right)
+    rows = np.nonzero(has_l & has_r)[0]
+    return rows, a_l[rows], b_l[rows], a_r[rows], b_r[rows]
+
+
+def _steep(x: np.ndarray, rows: np.ndarray, max_slope: float = 1.5) -> np.ndarray:
+    """(k,) bool: the outline x(row) changes by at most ``max_slope`` px per row around each row."""
+    if len(x) < 3:
+        return np.zeros(len(x), bool)
+    slope = np.abs(np.gradient(x.astype(np.float64), rows.astype(np.float64)))
+    # both neighbours must be steep too: a corner's neighbour is not
+    slope = np.maximum(slope, np.maximum(np.r_[slope[1:], np.inf], np.r_[np.inf, slope[:-1]]))
+    return slope <= max_slope
+
+
+def _robust_span(values: np.ndarray) -> float:
+    """max - min, ignoring the single most extreme value at each end when there are enough values."""
+    v = np.sort(values)
+    if len(v) >= 8:
+        return float(v[-2] - v[1])
+    return float(v[-1] - v[0])
+
+
+def _clean_mask(mask: np.ndarray | None, region: np.ndarray) -> np.ndarray | None:
+    """The observed part inside its possible region: thin strings opened away, the largest blob kept."""
+    if mask is None or mask.shape != region.shape:
+        return None
+    m = (mask.astype(bool) & region).astype(np.uint8)
+    m = cv2.morphologyEx(m, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(m, connectivity=8)
+    if count <= 1:
+        return None
+    largest = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+    return labels == largest
+
+
+def dense_top(z: np.ndarray, window_mm: float, min_count: int) -> float:
+    """The highest z with at least ``min_count`` points in the ``window_mm`` below it."""
+    zs = np.sort(z)
+    below = np.arange(len(zs)) + 1 - np.searchsorted(zs, zs - window_mm, side="left")
+    dense = np.nonzero(below >= min_count)[0]
+    return float(zs[dense[-1]] if len(dense) else zs[-1])
+
+
+def robust_extent(values: np.ndarray, tail: float = 0.01) -> float:
+    """Extent of ``values`` that ignores a ``tail`` fraction of strays at each end.
+
+    Pixels sample the part uniformly across the image, so the points' density across the line of
+    sight is close to uniform and the trimmed range is rescaled by 1 / (1 - 2 tail) to undo the trim.
+    """
+    lo, hi = np.quantile(values, [tail, 1.0 - tail])
+    return float((hi - lo) / (1.0 - 2.0 * tail))
+
+
+def fill_along_rows(disparity: np.ndarray, mask: np.ndarray, max_gap: int, edge_gap: int = 3) -> np.ndarray:
+    """(h, w) disparity defined on ``mask``: matched values kept; holes between two matches of the same
+    row (each within ``max_gap`` px) take the nearer one; beyond the last match of a row only
+    ``edge_gap`` px are filled, since what lies there (a side only one camera sees) has no depth here."""
+    h, w = disparity.shape
+    valid = np.isfinite(disparity)
+    cols = np.broadcast_to(np.arange(w)[None, :], (h, w))
+    far = 10 ** 9
+    left = np.maximum.accumulate(np.where(valid, cols, -far), axis=1)
+    right = np.minimum.accumulate(np.where(valid, cols, far)[:, ::-1], axis=1)[:, ::-1]
+    dist_left, dist_right = cols - left, right - cols
+    source = np.where(dist_left <= dist_right, left, right)
+    between = (dist_left <= max_gap) & (dist_right <= max_gap)
+    near_end = np.minimum(dist_left, dist_right) <= edge_gap
+    ok = mask & (between | near_end)
+    out = np.full((h, w), np.nan, np.float32)
+    rows = np.broadcast_to(np.arange(h)[:, None], (h, w))
+    out[ok] = disparity[rows[ok], np.clip(source[ok], 0, w - 1)]
+    return out
+
+
+def foreground_mask(background: np.ndarray, frame: np.ndarray, prior: np.ndarray) -> np.ndarray:
+    """(h, w) bool: the material the shape check's background removal finds, for when its mask is not at hand.
+
+    ``prior`` is where the part may be; the bed around it is the noise reference.
+    """
+    from ..shape_check import clean_mask, material_evidence
+
+    if background.shape != frame.shape:
+        background = cv2.resize(background, (frame.shape[1], frame.shape[0]), interpolation=cv2.INTER_AREA)
+    near = cv2.dilate(prior.astype(np.uint8), np.ones((31, 31), np.uint8)) > 0
+    ys, xs = np.nonzero(cv2.dilate(near.astype(np.uint8), np.ones((41, 41), np.uint8)))
+    out = np.zeros(prior.shape, bool)
+    if len(ys) == 0:
+        return out
+    crop = (slice(ys.min(), ys.max() + 1), slice(xs.min(), xs.max() + 1))
+    evidence = material_evidence(background[crop], frame[crop], prior[crop], ~near[crop])
+    out[crop] = clean_mask(evidence.material)
+    return out
+
+
+def _difference(frame: np.ndarray, background: np.ndarray | None) -> np.ndarray | None:
+    """(h, w) float32 colour distance between a frame and its empty-bed frame (lightly smoothed)."""
+    if background is None or background.shape != frame.shape:
+        return None
+    diff = cv2.absdiff(frame, background).astype(np.float32)
+    diff = np.sqrt((diff ** 2).sum(axis=2)) if diff.ndim == 3 else diff
+    return cv2.GaussianBlur(diff, (3, 3), 0)
+
+
+def _moved(frame: np.ndarray, mask: np.ndarray | None, shift) -> tuple[np.ndarray, np.ndarray | None]:
+    """Frame (and mask) translated by -shift: back to where the calibrated camera expects things."""
+    dx, dy = float(shift[0]), float(shift[1])
+    if dx == 0 and dy == 0:
+        return frame, mask
+    move = np.float32([[1, 0, -dx], [0, 1, -dy]])
+    size = (frame.shape[1], frame.shape[0])
+    frame = cv2.warpAffine(frame, move, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    if mask is not None:
+        mask = cv2.warpAffine(mask.astype(np.uint8), move, size, flags=cv2.INTER_NEAREST) > 0
+    return frame, mask
+
+
+def _to_size(frame: np.ndarray, camera: Camera) -> np.ndarray:
+    if frame.shape[:2] != (camera.height, camera.width):
+        frame = cv2.resize(frame, (camera.width, camera.height), interpolation=cv2.INTER_AREA)
+    return frame

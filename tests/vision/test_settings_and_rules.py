@@ -1,0 +1,72 @@
+"""DetectionSettings, the seed's rule, and the combined decision rule."""
+import numpy as np
+import pytest
+
+from octoprint_printwatch.core.pipeline import decide
+from octoprint_printwatch.core.seed_rules import seed_error
+from octoprint_printwatch.core.settings import DetectionSettings, SettingsError, parse_camera_threshold
+from octoprint_printwatch.core.shape_check import ShapeResult
+
+from .synthetic import PART
+
+
+def test_defaults_are_the_seed_values_and_round_trip():
+    s = DetectionSettings()
+    assert s.shape_threshold_pct == 7.0 and s.size_threshold_pct == 10.0
+    s2 = DetectionSettings.from_dict({**s.to_dict(), "camera_thresholds": {"c1": 9}, "unknown": 1})
+    assert s2.threshold_for("c1") == 9.0 and s2.threshold_for("c2") == 7.0
+    assert DetectionSettings.from_dict(s2.to_dict()) == s2
+
+
+@pytest.mark.parametrize("bad", [{"shape_threshold_pct": -1}, {"shape_threshold_pct": "x"},
+                                 {"camera_thresholds": {"a": float("nan")}}, {"min_failing_cameras": 0}])
+def test_bad_settings_are_refused(bad):
+    with pytest.raises(SettingsError):
+        DetectionSettings.from_dict(bad)
+
+
+def test_camera_threshold_syntax():
+    assert parse_camera_threshold("cam0L=8.5") == ("cam0L", 8.5)
+    with pytest.raises(SettingsError, match="CAMERA=PERCENT"):
+        parse_camera_threshold("8.5")
+
+
+def test_seed_rule_absorbs_scale_and_position_which_is_its_weakness():
+    expected = PART.mask()
+    assert seed_error(expected, expected) == 0.0
+    moved = np.roll(expected, 40, axis=1)       # a part that slid 40 px is "aligned back" by the seed
+    assert seed_error(moved, expected) < 1.0
+    half = expected.copy()
+    half[80:125] = False                          # half the height missing is still seen
+    assert seed_error(half, expected) > 40
+
+
+def shape(name, passed=True, usable=True):
+    return ShapeResult(name, 1.0 if passed else 20.0, 1.0, 0.0, 0.0, None, None, 0, 100, None, None, (0, 0), 7.0, 25.0,
+                       passed=passed, usable=usable, reasons=[] if passed else [f"{name}: bad"])
+
+
+def test_decide_fails_on_one_failing_camera_and_names_it():
+    verdict, reasons = decide({"a": shape("a"), "b": shape("b", passed=False)}, {}, DetectionSettings())
+    assert verdict == "fail" and reasons == ["b: bad"]
+
+
+def test_decide_never_pauses_on_missing_evidence():
+    s = DetectionSettings()
+    assert decide({}, {}, s, ["a", "b"])[0] == "unknown"
+    assert decide({"a": shape("a", passed=True, usable=False)}, {}, s)[0] == "unknown"
+    verdict, reasons = decide({"a": shape("a")}, {}, s, ["b"])
+    assert verdict == "ok" and "b: no frame" in reasons[0]
+
+
+def test_decide_size_rule_and_abstention():
+    s = DetectionSettings()
+    assert decide({"a": shape("a")}, {"a+b": {"error_pct": 25.0}}, s)[0] == "fail"
+    assert decide({"a": shape("a")}, {"a+b": {"error_pct": None, "abstained": True}}, s)[0] == "ok"
+    assert decide({}, {"a+b": {"error_pct": 3.0}}, s)[0] == "ok"
+
+
+def test_min_failing_cameras():
+    s = DetectionSettings(min_failing_cameras=2)
+    assert decide({"a": shape("a", passed=False), "b": shape("b")}, {}, s)[0] == "ok"
+    assert decide({"a": shape("a", passed=False), "b": shape("b", passed=False)}, {}, s)[0] == "fail"

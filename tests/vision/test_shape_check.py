@@ -1,0 +1,238 @@
+"""Each stage of the shape check on small synthetic images whose right answer is known."""
+import numpy as np
+import pytest
+
+from octoprint_printwatch.core.shape_check import (
+    align_expected, check_shape, compare_masks, material_evidence, shift_mask,
+)
+
+from .synthetic import PART, W, Box, bed_texture, camera_effects, darken, paint_part, regions
+
+
+@pytest.fixture(scope="module")
+def bed():
+    return bed_texture()
+
+
+def background_of(bed):
+    return camera_effects(bed, seed=11)
+
+
+# ------------------------------------------------------------ background removal
+def test_shadow_outside_the_part_is_not_material_but_a_dark_part_inside_it_is(bed):
+    shadow = Box(60, 170, 260, 200).mask()
+    frame = camera_effects(darken(paint_part(bed, PART), shadow, 0.6))
+    prior = PART.mask()
+    sample = ~Box(90, 60, 230, 215).mask()
+    ev = material_evidence(background_of(bed), frame, prior, sample)
+    assert ev.material[PART.mask()].mean() > 0.95
+    inner_shadow = Box(70, 175, 250, 195).mask()
+    assert ev.material[inner_shadow].mean() < 0.02
+    # the same darkening inside the prior (a part darker than the bed, same hue) is evidence of material
+    dark_part = camera_effects(darken(bed, PART.mask(), 0.6))
+    ev2 = material_evidence(background_of(bed), dark_part, prior, sample)
+    assert ev2.material[Box(115, 85, 205, 165).mask()].mean() > 0.9
+    assert not ev2.strong[Box(115, 85, 205, 165).mask()].any()  # but not strong enough to count as extra
+
+
+def test_exposure_and_white_balance_change_is_normalised_away(bed):
+    frame = camera_effects(bed, gain=(0.7, 0.8, 0.95))
+    ev = material_evidence(background_of(bed), frame, PART.mask(), ~PART.mask())
+    assert ev.material.mean() < 0.01
+    assert ev.gains == pytest.approx([0.7, 0.8, 0.95], abs=0.04)
+
+
+def test_one_pixel_shake_is_not_a_change(bed):
+    frame = camera_effects(bed, shake=(1, -1))
+    ev = material_evidence(background_of(bed), frame, PART.mask(), ~PART.mask())
+    assert ev.material.mean() < 0.01
+    assert ev.bed.mean() > 0.9
+
+
+# ------------------------------------------------------------------- alignment
+def test_alignment_recovers_a_small_shift_exactly():
+    expected = PART.mask()
+    observed = PART.moved(5, -3).mask()
+    assert align_expected(observed, expected, 10) == (5, -3)
+
+
+def test_alignment_never_moves_further_than_its_bound():
+    observed = PART.moved(30, 0).mask()  # a part that moved ~10 mm
+    dx, dy = align_expected(observed, PART.mask(), 8)
+    assert dx * dx + dy * dy <= 64
+
+
+def test_alignment_stays_near_its_anchor():
+    observed = PART.moved(9, 0).mask()
+    assert align_expected(observed, PART.mask(), 10, anchor=(1, 0), max_drift=2) == (3, 0)
+
+
+# ------------------------------------------------------------------ comparison
+def test_compare_masks_counts_missing_extra_and_band():
+    expected = PART.mask()
+    observed = expected.copy()
+    observed[80:110, 110:210] = False          # top 30 rows gone: 3000 px
+    observed[100:170, 215:235] = True          # 20x70 extra block beside it: 1400 px
+    bed = ~observed
+    band = Box(110, 80, 210, 110).mask()
+    everywhere = np.ones_like(expected)
+    c = compare_masks(observed, bed, expected, band, everywhere, ~everywhere, tolerance=0, band_reach=10)
+    assert c.missing.sum() == 3000
+    assert c.extra.sum() == 1400
+    assert c.band_missing == 3000
+    assert 0 < c.band_extra < 1400   # only the extra rows next to the band count for it
+    far = expected & False
+    far[150:170, 215:235] = True
+    c_far = compare_masks(expected[:] | far, ~(expected | far), expected, band, everywhere, ~everywhere,
+                          tolerance=0, band_reach=10)
+    assert c_far.extra.sum() == 400 and c_far.band_extra == 0
+    # with a tolerance, a thin rim does not count
+    c2 = compare_masks(shift_mask(expected, 1, 0), ~shift_mask(expected, 1, 0), expected, band, everywhere,
+                       ~everywhere, tolerance=2, band_reach=10)
+    assert c2.missing.sum() == 0 and c2.extra.sum() == 0
+
+
+def test_uncertain_pixels_are_not_counted_missing():
+    expected = PART.mask()
+    observed = np.zeros_like(expected)
+    bed = np.zeros_like(expected)  # nothing is confidently bed: no evidence either way
+    everywhere = np.ones_like(expected)
+    c = compare_masks(observed, bed, expected, expected, everywhere, ~everywhere, tolerance=2, band_reach=5)
+    assert c.missing.sum() == 0
+
+
+# ------------------------------------------------------------- the whole check
+def run(bed, frame, reg=None, **kw):
+    return check_shape("cam", background_of(bed), frame, reg or regions(), **kw)
+
+
+def test_a_normal_check_passes_despite_shadow_exposure_shake_and_jpeg(bed):
+    scene = darken(paint_part(bed, PART), Box(80, 170, 250, 195).mask(), 0.55)
+    frame = camera_effects(scene, gain=(0.85, 0.9, 0.8), shake=(1, 0))
+    r = run(bed, frame)
+    assert r.passed and r.usable
+    assert r.error_pct < 3.0
+    assert r.band_error_pct is not None and r.band_error_pct < 10
+
+
+def test_calibration_error_within_the_bound_is_aligned_away(bed):
+    frame = camera_effects(paint_part(bed, PART.moved(6, -4)))
+    r = run(bed, frame)
+    assert abs(r.shift_px[0] - 6) <= 1 and abs(r.shift_px[1] + 4) <= 1
+    assert r.passed and r.error_pct < 2.0
+
+
+def test_runout_is_reported_as_missing_material(bed):
+    # the part stopped growing: its top 30 rows (the newest band) are absent
+    frame = camera_effects(paint_part(bed, Box(110, 110, 210, 170)))
+    r = run(bed, frame)
+    assert not r.passed
+    # 30 of 90 rows missing: (30 - 2) x (100 - 4) px of 9000 beyond the 2-px tolerance rim, less the few
+    # rows JPEG ringing and closing add to the top edge of what is left
+    assert 100 * 24 * 96 / 9000 <= r.missing_pct <= 100 * 28 * 96 / 9000 + 0.5
+    assert r.extra_pct < 1
+    assert r.band_missing_pct > 70   # of the whole band, tolerance rim included
+    assert any("missing" in reason for reason in r.reasons)
+
+
+def test_a_detached_part_moved_10mm_is_not_aligned_back(bed):
+    frame = camera_effects(paint_part(bed, PART.moved(35, 0)))   # 35 px ~ 10 mm, bound 10 px
+    r = run(bed, frame)
+    assert not r.passed
+    assert r.missing_pct > 15 and r.extra_pct > 15
+    assert abs(r.shift_px[0]) <= 10
+
+
+def test_strings_and_flat_bed_marks_are_not_extra_material(bed):
+    scene = paint_part(bed, PART)
+    scene[175:177, 90:230] = (230, 230, 230)            # a 2-px skirt line in front of the part
+    scene[120, 210:260] = (40, 40, 210)                 # a 1-px string
+    dont_care = Box(80, 172, 240, 182).mask()
+    r = run(bed, camera_effects(scene), regions(dont_care=dont_care))
+    assert r.passed and r.extra_pct < 0.5
+
+
+def test_spaghetti_beside_the_part_is_extra_material(bed):
+    scene = paint_part(bed, PART)
+    rng = np.random.default_rng(5)
+    for _ in range(60):  # a tangle of 3-px strands
+        x, y = rng.integers(212, 250), rng.integers(90, 165)
+        scene = scene.copy()
+        import cv2
+        cv2.line(scene, (int(x), int(y)), (int(x + rng.integers(-15, 15)), int(y + rng.integers(-15, 15))),
+                 (40, 40, 210), 3)
+    r = run(bed, camera_effects(scene))
+    assert not r.passed
+    assert r.extra_pct > r.missing_pct
+    assert any("unexpected material" in reason for reason in r.reasons)
+
+
+def test_material_outside_the_search_region_is_ignored(bed):
+    scene = paint_part(bed, PART)
+    scene[0:40, 100:220] = (90, 90, 90)   # the parked hotend at the top of the frame
+    r = run(bed, camera_effects(scene))
+    assert r.passed and r.extra_pct < 0.5
+
+
+def test_a_moved_camera_gives_no_verdict_instead_of_a_pause():
+    # a bed with strong structure (tape strips); the camera was knocked by half a strip after the background
+    taped = bed_texture(grain=4).astype(np.float32)
+    strips = (np.arange(W) // 20) % 2 == 0
+    taped[:, strips] *= 0.55
+    taped = np.clip(taped, 0, 255).astype(np.uint8)
+    frame = camera_effects(paint_part(np.roll(taped, 10, axis=1), PART.moved(10, 0)))
+    r = check_shape("cam", background_of(taped), frame, regions())
+    assert not r.usable and r.passed
+    assert "no verdict" in r.reasons[0]
+
+
+def test_overlay_paints_missing_red_and_extra_magenta(bed):
+    frame = camera_effects(paint_part(bed, Box(110, 110, 240, 170)))
+    r = run(bed, frame)
+    img = r.overlay
+    assert img.shape == (240, 320, 3) and img.dtype == np.uint8
+    b, g, rr = img[95, 160].astype(int)       # missing top
+    assert rr > 120 and rr > b + 40 and rr > g + 40
+    b, g, rr = img[140, 230].astype(int)      # extra to the right
+    assert b > 100 and rr > 100 and g < min(b, rr) - 40
+
+
+# ------------------------------------------------------- newest band and growth
+def test_band_offset_finds_a_shifted_top_section():
+    from octoprint_printwatch.core.shape_check import band_offset
+
+    expected = PART.mask()
+    band = Box(110, 80, 210, 110).mask()
+    observed = Box(110, 110, 210, 170).mask() | Box(118, 80, 218, 110).mask()  # top 30 rows moved 8 px
+    assert band_offset(observed, expected, band, reach=20) == 8
+    assert band_offset(expected, expected, band, reach=20) == 0            # a normal print
+    runout = Box(110, 110, 210, 170).mask()
+    assert band_offset(runout, expected, band, reach=20) == 0              # nothing there to be shifted
+
+
+def test_profile_growth_is_full_for_a_growing_part_and_nil_for_a_stalled_one():
+    from octoprint_printwatch.core.shape_check import profile_growth
+
+    before, now = Box(110, 110, 210, 170).mask(), PART.mask()     # the model rises by 30 rows
+    assert profile_growth(now, before, now, before) == pytest.approx(100)
+    assert profile_growth(before, before, now, before) == pytest.approx(0)
+    half = Box(110, 95, 210, 170).mask()
+    assert profile_growth(half, before, now, before) == pytest.approx(50)
+    assert profile_growth(now, before, now, now) is None                 # the model did not rise
+
+
+def test_a_part_the_colour_of_its_background_is_not_declared_missing(bed):
+    from octoprint_printwatch.core.shape_check import detectable_fraction
+
+    noise = {"chroma": 2.0, "bright": 3.0, "dark": 3.0}
+    palette = np.array([[30, 30, 32], [40, 40, 42]], np.float32)              # a black part
+    behind = np.array([[35, 35, 36], [200, 200, 200]], np.float32)             # black backdrop, white wall
+    assert detectable_fraction(palette, behind, noise, 5.0).tolist() == [0.0, 1.0]
+    # in a whole check: the top third of a black part in front of a black strip is "not seen",
+    # yet only counted missing where it would have been visible
+    scene = bed.copy()
+    scene[60:110] = (30, 30, 32)                                              # a black backdrop strip
+    background = camera_effects(scene, seed=11)
+    frame = camera_effects(paint_part(scene, Box(110, 110, 210, 170), colour=(32, 32, 34)))
+    r = check_shape("cam", background, frame, regions(), palette=np.array([[32, 32, 34]], np.float32))
+    assert r.missing_pct < 2 and r.passed
