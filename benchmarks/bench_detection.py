@@ -56,16 +56,20 @@ class Spec:
     seed: int
 
 
-def plan_specs(counts: dict[str, int]) -> list[Spec]:
-    """A deterministic spread over parts, looks and rigs for each failure kind."""
+def plan_specs(counts: dict[str, int], holdout: int = 0) -> list[Spec]:
+    """A deterministic spread over parts, looks and rigs for each failure kind.
+
+    ``holdout`` > 0 gives a different set (other seeds, so other random looks, calibration errors and
+    noise, and other part/look/rig combinations) to check that a change does not only fit the default set.
+    """
     specs = []
     for k, (kind, n) in enumerate(counts.items()):
         for i in range(n):
-            j = i + 3 * k
+            j = i + 3 * k + 5 * holdout
             part = PARTS[j % len(PARTS)]
-            look = LOOKS[(i + k) % len(LOOKS)]
-            rig = RIGS[(i + 2 * k) % len(RIGS)]
-            seed = 1000 + 37 * k + i
+            look = LOOKS[(i + k + 3 * holdout) % len(LOOKS)]
+            rig = RIGS[(i + 2 * k + holdout) % len(RIGS)]
+            seed = 1000 + 37 * k + i + 7919 * holdout
             specs.append(Spec(f"{kind}_{i:02d}_{part}_{look}_{rig}", kind, part, look, rig, seed))
     return specs
 
@@ -102,6 +106,10 @@ def evaluate(folder: Path, settings: DetectionSettings) -> dict:
     plan = prepare_job(gcode_path=recording.gcode, model_path=recording.model, cameras=recording.cameras,
                        pairs=recording.pairs, check_heights=[(c.layer, c.z) for c in checks], settings=settings)
     backgrounds = {n: recording.read_background(n) for n in recording.cameras}
+    # the seed's rule needs the undistorted silhouettes, which the job plan does not keep
+    from octoprint_printwatch.core.render import render_expected_views
+    undistorted = {(cam, round(z, 4)): view.silhouette_undistorted for (cam, z), view in render_expected_views(
+        plan.part, list(recording.cameras.values()), [c.z for c in checks]).items()}
     runner = CheckRunner(plan, settings, backgrounds)
     runner.keep_pictures = False
     seed_prev: dict[str, np.ndarray] = {}
@@ -115,7 +123,7 @@ def evaluate(folder: Path, settings: DetectionSettings) -> dict:
             if frame is None or backgrounds.get(name) is None:
                 continue
             view = plan.view(name, check.z)
-            s = seed_check(name, backgrounds[name], frame, view.silhouette_undistorted,
+            s = seed_check(name, backgrounds[name], frame, undistorted[(name, round(check.z, 4))],
                            recording.cameras[name], seed_prev.get(name))
             seed_prev[name] = s.mask
             seed_errors[name] = s.error_pct
@@ -236,6 +244,9 @@ def main(argv=None) -> int:
     parser.add_argument("--quick", action="store_true", help="14 recordings instead of 66")
     parser.add_argument("--data", default="/tmp/printwatch-bench-detection", help="recordings folder (cache)")
     parser.add_argument("--json", help="write per-check results here")
+    parser.add_argument("--holdout", type=int, default=0,
+                        help="N > 0: a hold-out set with other seeds and combinations (use another --data)")
+    parser.add_argument("--counts", help="recordings per kind, e.g. normal=8,runout=4 (instead of the default set)")
     parser.add_argument("--only", help="only recordings whose name contains this")
     parser.add_argument("--details", action="store_true", help="also list every recording's outcome")
     parser.add_argument("--generate-only", action="store_true", help="only render the recordings (cache)")
@@ -243,7 +254,10 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     data = Path(args.data)
     data.mkdir(parents=True, exist_ok=True)
-    specs = plan_specs(QUICK if args.quick else KINDS)
+    counts = QUICK if args.quick else KINDS
+    if args.counts:
+        counts = {kind: int(n) for kind, n in (item.split("=") for item in args.counts.split(","))}
+    specs = plan_specs(counts, args.holdout)
     if args.only:
         specs = [s for s in specs if args.only in s.name]
     if args.cached_only:

@@ -29,6 +29,39 @@ VERDICTS = ("ok", "fail", "unknown")
 
 
 # ----------------------------------------------------------------- the plan
+class PlannedView:
+    """The masks of an ``ExpectedView`` the checks use, bit-packed.
+
+    A job keeps a view per camera per check height for the whole print (6 cameras x 40
+    checks is common); the full ``ExpectedView`` with its two float32 depth maps is about
+    3.6 MB at 640x480, this about 80 kB, which matters on a Raspberry Pi.
+    """
+
+    __slots__ = ("camera", "z", "z_previous", "shape", "_silhouette", "_new_band")
+
+    def __init__(self, view: Any):
+        self.camera = view.camera
+        self.z = float(view.z)
+        self.z_previous = float(view.z_previous)
+        self.shape = tuple(np.asarray(view.silhouette).shape)
+        self._silhouette = np.packbits(np.asarray(view.silhouette, bool))
+        self._new_band = np.packbits(np.asarray(view.new_band, bool))
+
+    def _unpack(self, packed: np.ndarray) -> np.ndarray:
+        """(h, w) bool"""
+        return np.unpackbits(packed, count=self.shape[0] * self.shape[1]).reshape(self.shape).astype(bool)
+
+    @property
+    def silhouette(self) -> np.ndarray:
+        """(h, w) bool: the expected part as the (distorted) camera sees it."""
+        return self._unpack(self._silhouette)
+
+    @property
+    def new_band(self) -> np.ndarray:
+        """(h, w) bool: the visible surface printed since the previous check height."""
+        return self._unpack(self._new_band)
+
+
 @dataclass
 class JobPlan:
     """Everything computed once per job.
@@ -36,7 +69,7 @@ class JobPlan:
     part : the expected part (``core.geometry.PartModel``).
     cameras : {name: Camera}; pairs : [(left, right)].
     check_heights : [(layer, z)] the planned checks, ascending.
-    views : {(camera, z): ExpectedView} rendered at the planned heights (more are added on demand).
+    views : {(camera, z): PlannedView} rendered at the planned heights (more are added on demand).
     footprint : (n, 2) convex hull of the part's XY extent (mm, printer coordinates).
     max_shift_px, tolerance_px : per camera, see :func:`camera_bounds`.
     """
@@ -72,6 +105,7 @@ class JobPlan:
                     found = view
             if found is None:
                 raise PrintWatchError(f"camera {camera}: no expected view could be rendered at z={z:g} mm")
+            found = PlannedView(found)
             self.views[key] = found
         return found
 
@@ -132,9 +166,9 @@ def prepare_job(
     heights = sorted({(int(layer), float(z)) for layer, z in (check_heights or [])}, key=lambda lz: lz[1])
     views = {}
     if heights:
-        rendered = render_expected_views(part, list(cameras.values()), [z for _, z in heights],
-                                         cache_dir=cache_dir)
-        views = {(cam, _zkey(z)): view for (cam, z), view in rendered.items()}
+        for camera in cameras.values():  # one camera at a time: full views are large, packed ones small
+            rendered = render_expected_views(part, [camera], [z for _, z in heights], cache_dir=cache_dir)
+            views.update({(cam, _zkey(z)): PlannedView(view) for (cam, z), view in rendered.items()})
     footprint = part_footprint(part.mesh)
     max_shift, tolerance, scale = {}, {}, {}
     for name, cam in cameras.items():
@@ -284,10 +318,12 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       band threshold), or when one camera fails decisively (missing AND extra material: the part
       moved; or the newest band offset sideways by ``layer_shift_mm``: a layer shift),
     * while the part visibly grows (median growth >= 50 %), a camera failing on missing material
-      alone does not count (a face the colour of what lies behind it looks missing);
+      alone does not count (a face the colour of what lies behind it looks missing); nor does missing
+      material alone from no more than half of the usable cameras unless the part stalled;
     * or when the part stopped growing (corroborated by missing material in at least one view:
-      25 % of the newest band, or half the threshold overall): the median over cameras of the observed rise of the
-      part's upper outline since the previous check is below ``min_growth_pct`` of the expected rise,
+      25 % of the newest band, or half the threshold overall, in a view that saw no rise): the median over
+      cameras of the observed rise of the part's upper outline since the previous check (readings below
+      -50 %, a sunk outline, left out) is below ``min_growth_pct`` of the expected rise,
       or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
       abstains reports no ``error_pct`` and never fails);
     * unknown when no camera and no pair gave usable evidence; ok otherwise.
@@ -303,11 +339,16 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     # A part that stopped growing stopped in every view: the growth test is decided on the median over
     # the cameras that could measure it, so one camera fooled by a top face the colour of the
     # background cannot pause a print on its own.
-    growth = [r.growth_pct for r in usable.values() if r.growth_pct is not None]
-    # ... and where the part stopped, its newest layers are missing in some view; without that, a
-    # flat rise is a top skin closing in a colour the camera cannot tell from the bed
-    band_gone = any((r.band_missing_pct or 0.0) >= 25.0 or r.missing_pct >= r.threshold / 2.0
-                    for r in usable.values())
+    # An outline that sank by more than half the expected rise is not a part that stopped (material does
+    # not vanish): that camera was fooled at this check or the previous one (a top face the colour of what
+    # lies behind it); its reading is left out.
+    measured = {cam: r for cam, r in usable.items() if r.growth_pct is not None and r.growth_pct >= -50.0}
+    growth = [r.growth_pct for r in measured.values()]
+    # ... and where the part stopped, its newest layers are missing in a view that sees no rise; without
+    # that, a flat rise is a top skin closing in a colour the camera cannot tell from the bed
+    band_gone = any(r.growth_pct < settings.min_growth_pct
+                    and ((r.band_missing_pct or 0.0) >= 25.0 or r.missing_pct >= r.threshold / 2.0)
+                    for r in measured.values())
     stalled = bool(growth) and float(np.median(growth)) < settings.min_growth_pct and band_gone
     size_fail, size_usable = [], 0
     for key, entry in size.items():
@@ -326,7 +367,16 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     # a decisive signature (the part displaced, the newest layers offset) suffices from one camera.
     needed = max(settings.min_failing_cameras, math.ceil(len(usable) / 2))
     decisive = [r for r in failing if r.decisive]
-    if growth and float(np.median(growth)) >= 50.0:
+    missing_only = [r for r in failing
+                    if not r.decisive and 0 < r.missing_pct and r.extra_pct * 2.0 <= r.missing_pct]
+    if missing_only and not stalled and 2 * len(missing_only) <= len(usable):
+        # "Missing" alone, from no more than half of the cameras, while the part has not stopped growing:
+        # faces the colour of what lies behind them (dark on dark, grey on grey) look exactly like this,
+        # a runout does not (it stalls the growth, and the part's top is gone from most views).
+        failing = [r for r in failing if r not in missing_only]
+    # (here every reading counts: a sinking outline is evidence against growth, e.g. a part knocked over)
+    rising = [r.growth_pct for r in usable.values() if r.growth_pct is not None]
+    if rising and float(np.median(rising)) >= 50.0:
         # The part's outline rises as the model says: "material missing" without any extra material
         # is then a face the camera cannot tell from what lies behind it, not a runout.
         failing = [r for r in failing if r.decisive or r.extra_pct * 2.0 > r.missing_pct]

@@ -480,8 +480,9 @@ def _agree(depth: np.ndarray, silhouette: np.ndarray) -> np.ndarray:
 
 
 _MEMORY_CACHE: dict = {}
-#: Views kept in memory (each is about 3.6 MB at 640x480: four masks, two float32 depth maps).
-_MEMORY_CACHE_LIMIT = 32
+#: Views kept in memory (each is about 3.6 MB at 640x480: four masks, two float32 depth maps); the
+#: on-disk cache serves repeats, so this stays small for a long-running OctoPrint on a Raspberry Pi.
+_MEMORY_CACHE_LIMIT = 8
 
 
 def _save(path: Path, view: ExpectedView) -> None:

@@ -26,6 +26,8 @@ Stages (each a function, each tested on synthetic images with known answers):
    missing (expected, confidently bed now) and extra (material where none is
    expected, outside the bed-marks/reflection zone, inside the search box), and
    the same figures for the newest layer band.
+4. :func:`displaced_part` - when much of the part is missing, whether the whole part stands
+   elsewhere (knocked off, detached), even inside the bed-marks zone.
 """
 from __future__ import annotations
 
@@ -525,6 +527,46 @@ def profile_growth(observed: np.ndarray, previous: np.ndarray, expected: np.ndar
     return float(np.median(np.clip(ratio, -1.0, 2.0)) * 100.0)
 
 
+def displaced_part(observed: np.ndarray, expected: np.ndarray, reach: int, min_move: float,
+                   min_cover: float = 0.8) -> tuple[int, int] | None:
+    """(dx, dy) px by which the whole expected part is found moved, or None.
+
+    ``observed`` and ``expected`` are (h, w) bool, ``expected`` already aligned. Every shift within
+    ``reach`` px is tried; the part counts as moved when the shifted outline is covered by material
+    (``min_cover`` of it) far better than the aligned one (by half of what the aligned one misses), and
+    the shift is at least ``min_move`` px. A brim, skirt or shadow next to a part still in place cannot
+    pass: it is far thinner than the part, so no shift covers the outline with it, while the part itself
+    still covers the aligned outline. A part that slid off is found wherever it lies, inside the
+    bed-marks zone or not.
+    """
+    box = bounding_box(expected)
+    total = float(expected.sum())
+    if box is None or reach < 1 or total <= 0:
+        return None
+    y0, y1, x0, x1 = box
+    h, w = observed.shape
+    s = int(reach)
+    padded = np.zeros((y1 - y0 + 2 * s, x1 - x0 + 2 * s), np.float32)
+    sy0, sy1, sx0, sx1 = max(0, y0 - s), min(h, y1 + s), max(0, x0 - s), min(w, x1 + s)
+    padded[sy0 - (y0 - s): sy1 - (y0 - s), sx0 - (x0 - s): sx1 - (x0 - s)] = observed[sy0:sy1, sx0:sx1]
+    template = expected[y0:y1, x0:x1].astype(np.float32)
+    cover = _overlap_map(padded, template, s) / total   # (2s+1, 2s+1), index = shift + s
+    dys, dxs = np.mgrid[-s: s + 1, -s: s + 1]
+    far = dxs * dxs + dys * dys >= min_move * min_move
+    if not far.any():
+        return None
+    at_zero = float(cover[s, s])
+    best = np.where(far, cover, -1.0)
+    iy, ix = np.unravel_index(int(np.argmax(best)), best.shape)
+    dx, dy = int(dxs[iy, ix]), int(dys[iy, ix])
+    # the coarse search only proposes; the figures are exact
+    at_zero = float(np.count_nonzero(observed & expected)) / total
+    found = float(np.count_nonzero(observed & shift_mask(expected, dx, dy))) / total
+    if found >= min_cover and found - at_zero >= 0.5 * (1.0 - at_zero) and found - at_zero >= 0.2:
+        return dx, dy
+    return None
+
+
 # ------------------------------------------------------- stage 3: comparison
 @dataclass
 class Comparison:
@@ -603,8 +645,13 @@ def compare_masks(
         np.maximum.at(thickness, labels.ravel(), depth.ravel())
         flat = (inside >= 0.8 * np.maximum(area, 1)) & (2.0 * thickness <= flat_max_px)
         if reflection is not None:
+            # a brim and the part's reflection touch at the part's foot and merge into one blob: it lies
+            # in the union of the two zones, not (80 %) in either. A part that slid into these zones is
+            # still found, by :func:`displaced_part`, from the material missing where it belongs.
             mirrored = np.bincount(labels.ravel(), weights=reflection.ravel().astype(np.float64), minlength=count)
-            flat |= mirrored >= 0.8 * np.maximum(area, 1)
+            either = np.bincount(labels.ravel(), weights=(reflection | dont_care).ravel().astype(np.float64),
+                                 minlength=count)
+            flat |= (mirrored >= 0.8 * np.maximum(area, 1)) | (either >= 0.8 * np.maximum(area, 1))
         flat[0] = False
         extra &= ~flat[labels]
     band_core = band & core
@@ -756,6 +803,15 @@ def check_shape(
             offset_px = band_offset(observed, expected_a, band_a, int(np.ceil(8.0 * regions.px_per_mm)))
             band_offset_mm = abs(offset_px) / regions.px_per_mm
 
+    # A part knocked off its place: most of the outline is empty, and the whole part stands elsewhere
+    # (perhaps inside the bed-marks zone, where it would otherwise pass for a brim). Searched up to
+    # 15 mm away at the part's image scale; a move smaller than the layer-shift limit is not counted.
+    moved_px = None
+    if missing_pct >= threshold and regions.px_per_mm > 0:
+        reach = int(np.ceil(min(15.0 * regions.px_per_mm, 0.25 * w)))
+        min_move = max(layer_shift_mm * regions.px_per_mm, 2.0 * tol + 1.0)
+        moved_px = displaced_part(observed, expected_a, reach, min_move)
+
     reasons: list[str] = []
     decisive = False
     usable = changed <= max_changed_bed_fraction
@@ -775,6 +831,10 @@ def check_shape(
             kind = _describe(missing_pct, extra_pct)
             reasons.append(f"{camera}: shape differs from the model by {error_pct:.1f}% "
                            f"(limit {threshold:g}%): {kind}")
+        if moved_px is not None:
+            passed, decisive = False, True
+            reasons.append(f"{camera}: the whole part is seen {np.hypot(*moved_px) / regions.px_per_mm:.0f} mm "
+                           f"away from where it belongs (detached or knocked off?)")
         persistent = previous_offset_mm is not None and previous_offset_mm >= layer_shift_mm
         if band_offset_mm is not None and band_offset_mm >= layer_shift_mm * (1.0 if persistent else 2.0):
             passed, decisive = False, True

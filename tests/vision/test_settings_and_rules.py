@@ -70,3 +70,38 @@ def test_min_failing_cameras():
     s = DetectionSettings(min_failing_cameras=2)
     assert decide({"a": shape("a", passed=False), "b": shape("b")}, {}, s)[0] == "ok"
     assert decide({"a": shape("a", passed=False), "b": shape("b", passed=False)}, {}, s)[0] == "fail"
+
+
+def figures(name, *, missing=0.0, extra=0.0, growth=None, band_missing=0.0):
+    """A ShapeResult with the figures the decision rule reads (failing when over the 7 % threshold)."""
+    error = missing + extra
+    return ShapeResult(name, error, error, missing, extra, band_missing, band_missing, 500, 5000, None, growth,
+                       (0, 0), 7.0, 50.0, passed=error <= 7.0, usable=True,
+                       reasons=[] if error <= 7.0 else [f"{name}: shape differs"])
+
+
+def test_missing_alone_from_one_camera_of_two_does_not_pause_a_growing_part():
+    s = DetectionSettings()
+    # a face the colour of the backdrop: one of two views "misses" material, the part still rises
+    assert decide({"a": figures("a", missing=12.0, growth=100.0), "b": figures("b", growth=100.0)}, {}, s)[0] == "ok"
+    assert decide({"a": figures("a", missing=12.0, growth=30.0), "b": figures("b", growth=40.0)}, {}, s)[0] == "ok"
+    # ... but both views, or the only view, missing material is a failure
+    assert decide({"a": figures("a", missing=12.0, growth=30.0),
+                   "b": figures("b", missing=9.0, growth=40.0)}, {}, s)[0] == "fail"
+    assert decide({"a": figures("a", missing=12.0)}, {}, s)[0] == "fail"
+    # missing AND extra material (the part moved) from one camera is enough
+    assert decide({"a": figures("a", missing=8.0, extra=8.0), "b": figures("b")}, {}, s)[0] == "fail"
+
+
+def test_a_stall_needs_the_newest_layers_missing_in_a_view_that_saw_no_rise():
+    s = DetectionSettings()
+    # runout: no rise anywhere, and the newest layers are gone from one of those views
+    stalled = {"a": figures("a", growth=0.0, missing=4.0, band_missing=30.0), "b": figures("b", growth=5.0),
+               "c": figures("c", growth=60.0)}
+    verdict, reasons = decide(stalled, {}, s)
+    assert verdict == "fail" and any("not grown" in r for r in reasons)
+    # a top skin closing: one view sees no rise but the newest layers in place; the view that "misses"
+    # them saw the outline sink (impossible for a growing or a stalled part: that camera was fooled)
+    closing = {"a": figures("a", growth=0.0), "b": figures("b", growth=127.0),
+               "c": figures("c", growth=-100.0, missing=5.0, band_missing=26.0)}
+    assert decide(closing, {}, s)[0] == "ok"

@@ -236,3 +236,24 @@ def test_a_part_the_colour_of_its_background_is_not_declared_missing(bed):
     frame = camera_effects(paint_part(scene, Box(110, 110, 210, 170), colour=(32, 32, 34)))
     r = check_shape("cam", background, frame, regions(), palette=np.array([[32, 32, 34]], np.float32))
     assert r.missing_pct < 2 and r.passed
+
+
+def test_displaced_part_finds_a_moved_part_but_not_a_brim():
+    from octoprint_printwatch.core.shape_check import displaced_part
+
+    expected = np.zeros((200, 300), bool)
+    expected[80:130, 100:160] = True
+    brim = np.zeros_like(expected)
+    brim[120:140, 85:175] = True                         # a flat ring at the foot, in front
+    brim[80:140, 85:100] = brim[80:140, 160:175] = True
+    # the part in place with a brim, or with a face the camera cannot see (half of it missing)
+    assert displaced_part(expected | brim, expected, reach=60, min_move=6) is None
+    half = expected.copy()
+    half[80:105] = False
+    assert displaced_part(half | brim, expected, reach=60, min_move=6) is None
+    # the part knocked 40 px sideways (its old place empty), standing on its brim or not
+    moved = np.roll(expected, 40, axis=1)
+    assert displaced_part(moved | brim, expected, reach=60, min_move=6) == (40, 0)
+    assert displaced_part(np.roll(expected, -25, axis=0), expected, reach=60, min_move=6) == (0, -25)
+    # a move smaller than the limit is the alignment's business, not a detachment
+    assert displaced_part(np.roll(expected, 4, axis=1), expected, reach=60, min_move=6) is None
