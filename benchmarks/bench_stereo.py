@@ -4,6 +4,8 @@
     .venv/bin/python benchmarks/bench_stereo.py --variants 3  # only the first three variants (faster)
     .venv/bin/python benchmarks/bench_stereo.py --quick     # 6 recordings
     .venv/bin/python benchmarks/bench_stereo.py --data DIR --json results.json
+    .venv/bin/python benchmarks/bench_stereo.py --seed-base 7000 --data /tmp/printwatch-bench-stereo-holdout
+                                                            # the hold-out set (other seeds)
 
 Each recording is written by ``octoprint_printwatch.simulator`` (stations3 or pair
 rigs: relaxed pairs with a user's calibration error on every camera; varied
@@ -66,7 +68,9 @@ class Spec:
     seed: int
 
 
-def plan_specs(counts: dict[str, int]) -> list[Spec]:
+def plan_specs(counts: dict[str, int], seed_base: int = 2000) -> list[Spec]:
+    """The recordings to render: parts, looks and rigs cycle; ``seed_base`` changes every random draw
+    (rig placement, calibration error, random looks, noise, failure timing) for a hold-out set."""
     specs = []
     for k, (kind, n) in enumerate(counts.items()):
         for i in range(n):
@@ -74,7 +78,7 @@ def plan_specs(counts: dict[str, int]) -> list[Spec]:
             part = PARTS[j % len(PARTS)]
             look = LOOKS[(i + k) % len(LOOKS)]
             rig = "stations3" if (i + k) % 3 else "pair"
-            seed = 2000 + 41 * k + i
+            seed = seed_base + 41 * k + i
             specs.append(Spec(f"{kind}_{i:02d}_{part}_{look}_{rig}", kind, part, look, rig, seed))
     return specs
 
@@ -205,11 +209,14 @@ def main(argv=None) -> int:
     parser.add_argument("--data", type=Path, default=Path("/tmp/printwatch-bench-stereo"))
     parser.add_argument("--json", type=Path)
     parser.add_argument("--variants", type=int, default=0, help="only the first N variants of the table")
+    parser.add_argument("--seed-base", type=int, default=2000,
+                        help="seed of the first recording (2000: the benchmark set; 7000: the hold-out set "
+                             "quoted in docs/stereo.md; use another --data folder per seed base)")
     args = parser.parse_args(argv)
     if args.variants:
         for name in list(VARIANTS)[args.variants:]:
             del VARIANTS[name]
-    specs = plan_specs(QUICK if args.quick else KINDS)
+    specs = plan_specs(QUICK if args.quick else KINDS, args.seed_base)
     args.data.mkdir(parents=True, exist_ok=True)
     results = []
     for spec in specs:

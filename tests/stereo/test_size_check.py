@@ -175,3 +175,39 @@ def test_bed_alignment_undoes_a_shifted_right_camera(scene):
     assert applied, note
     actual = rect.from_camera_pixels(right.undistort_points(seen + [3, 2]), "right")
     assert np.median(np.linalg.norm(actual - predicted, axis=1)) < 0.6
+
+
+def test_a_part_wider_than_the_model_fails_on_width(scene):
+    """A part 5 mm wider than the model across the line of sight (pushed over, shifted layers) fails."""
+    lo, hi = LO - [2.5, 0.0, 0.0], HI + [2.5, 0.0, 0.0]
+    left, right = scene["cams"]
+    wide = (render(left, lo, hi), render(right, lo, hi))
+    result = _check(scene).measure(*wide, 14.0)
+    assert not result.abstained, result.reason
+    assert result.width_mm == pytest.approx(27.0, rel=0.06)
+    assert result.failed and result.error_pct > 10
+
+
+def test_a_narrower_silhouette_is_not_held_against_the_print(scene):
+    """Both views showing the part 6 mm narrow is what an unseen side (dark filament on a dark bed)
+    looks like; the stopped or shrunk print shows in the height instead, so this never pauses."""
+    lo = LO + [6.0, 0.0, 0.0]
+    left, right = scene["cams"]
+    narrow = (render(left, lo, HI), render(right, lo, HI))
+    result = _check(scene).measure(*narrow, 14.0)
+    assert result.width_mm is not None and result.width_mm < result.expected_width_mm - 4.0
+    assert not result.failed
+    assert "narrower than the model" in result.reason or result.abstained
+
+
+def test_outline_width_is_the_distance_between_the_two_sides_medians():
+    from octoprint_printwatch.core.stereo.size_check import _side_span
+
+    rng = np.random.default_rng(0)
+    left_side = 10.0 + rng.normal(0, 0.2, 40)
+    right_side = 32.0 + rng.normal(0, 0.2, 40)
+    right_side[0] = 40.0  # a stray (tangent rays of different edges meeting outside a corner)
+    values = np.r_[left_side, right_side]
+    side = np.r_[np.zeros(40, int), np.ones(40, int)]
+    assert _side_span(values, side) == pytest.approx(22.0, abs=0.15)
+    assert values.max() - values.min() > 29.0  # what the extremes would have read
