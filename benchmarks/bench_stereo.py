@@ -27,7 +27,6 @@ import argparse
 import json
 import sys
 import time
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -39,6 +38,9 @@ from octoprint_printwatch.core.pipeline import CheckRunner, prepare_job  # noqa:
 from octoprint_printwatch.core.recording import load_recording  # noqa: E402
 from octoprint_printwatch.core.settings import DetectionSettings  # noqa: E402
 from octoprint_printwatch.core.stereo.size_check import PairSizeCheck, SizeSettings  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_detection import Spec, generate  # noqa: E402  (one way to render a benchmark recording)
 
 PARTS = ("gear", "cube", "cylinder", "sun_gear", "prism", "twisted_vase", "rect_prism", "pyramid")
 LOOKS = ("seed", "random", "blue_on_blue_tape", "orange_on_gold", "random", "black_on_black")
@@ -58,16 +60,6 @@ VARIANTS = {
 }
 
 
-@dataclass
-class Spec:
-    name: str
-    kind: str
-    part: str
-    look: str
-    rig: str
-    seed: int
-
-
 def plan_specs(counts: dict[str, int], seed_base: int = 2000) -> list[Spec]:
     """The recordings to render: parts, looks and rigs cycle; ``seed_base`` changes every random draw
     (rig placement, calibration error, random looks, noise, failure timing) for a hold-out set."""
@@ -81,29 +73,6 @@ def plan_specs(counts: dict[str, int], seed_base: int = 2000) -> list[Spec]:
             seed = seed_base + 41 * k + i
             specs.append(Spec(f"{kind}_{i:02d}_{part}_{look}_{rig}", kind, part, look, rig, seed))
     return specs
-
-
-def generate(spec: Spec, out: Path) -> Path:
-    folder = out / spec.name
-    if (folder / "truth.json").exists():
-        return folder
-    from octoprint_printwatch.simulator.look import PRESETS, random_look
-    from octoprint_printwatch.simulator.recording import write_recording
-    from octoprint_printwatch.simulator.rig import make_rig
-    from octoprint_printwatch.simulator.scenario import Scenario
-    from octoprint_printwatch.simulator.scene import PrintSimulator
-
-    rig = make_rig(spec.rig, seed=spec.seed)
-    look = random_look(spec.seed, rig.bed) if spec.look == "random" else PRESETS[spec.look]
-    sim = PrintSimulator(spec.part, rig, look, Scenario(spec.kind), seed=spec.seed)
-    tmp = out / (spec.name + ".partial")
-    if tmp.exists():
-        import shutil
-
-        shutil.rmtree(tmp)
-    write_recording(tmp, sim)
-    tmp.rename(folder)
-    return folder
 
 
 def evaluate(folder: Path) -> dict:
