@@ -3,7 +3,7 @@
     .venv/bin/python benchmarks/bench_plugin.py [--speed 1000] [--part cube]
 
 Starts ``octoprint serve`` with the virtual printer and PrintWatch, the
-simulated webcams of ``tests/plugin/webcam_server.py`` (two cameras, one
+simulated webcams of ``octoprint_printwatch/demo/webcam_server.py`` (two cameras, one
 through OctoPrint's classic webcam, one PrintWatch's own URL camera), and
 prints the same library part twice at ``M220 S<speed>``: once as uploaded
 (PrintWatch injected the checks) and once "without checks" (the exact upload,

@@ -1,4 +1,8 @@
-"""Plugin tests: helpers (OctoPrint harness, simulated webcams) live beside the tests."""
+"""Plugin tests: helpers (the test stack, the browser session) live beside the tests.
+
+The OctoPrint harness and the simulated webcams are in ``octoprint_printwatch/demo/``
+(the demo uses them too).
+"""
 import sys
 from pathlib import Path
 

@@ -1,6 +1,6 @@
 """A real OctoPrint with PrintWatch and simulated webcams: what the integration tests and the benchmark run.
 
-:func:`printwatch_stack` starts the webcam server (``webcam_server.py``) and an
+:func:`printwatch_stack` starts the webcam server (``octoprint_printwatch/demo/webcam_server.py``) and an
 ``octoprint serve`` configured to use it: camera ``classic`` through
 OctoPrint's bundled classic webcam (the OctoPrint-webcam path) and ``cam1`` as
 one of PrintWatch's own snapshot-URL cameras, both calibrated with the rig's
@@ -16,9 +16,8 @@ from pathlib import Path
 
 import requests
 
-from octoprint_server import ADMIN_KEY, OctoPrintServer, free_port
+from octoprint_printwatch.demo.octoprint_server import ADMIN_KEY, OctoPrintServer, free_port
 
-HERE = Path(__file__).resolve().parent
 PART = "cube"
 RIG = "ring:2"
 SEED = 3
@@ -27,7 +26,7 @@ CAMERA_NAMES = {"cam0": "classic", "cam1": "cam1"}
 
 
 def printwatch_settings(webcam_port: int, *, every_layers: int = 20, timeout_s: float = 3.0, extra=None) -> dict:
-    from webcam_server import calibrations
+    from octoprint_printwatch.demo.webcam_server import calibrations
 
     calib = calibrations(PART, RIG, SEED)
     settings = {
@@ -45,7 +44,7 @@ def printwatch_settings(webcam_port: int, *, every_layers: int = 20, timeout_s: 
 @contextlib.contextmanager
 def webcam_server(port: int, octoprint_url: str, *, scenario: str = "normal", onset_layer: int | None = None,
                   dead: list[str] = (), log: Path | None = None):
-    args = [sys.executable, str(HERE / "webcam_server.py"), "--port", str(port), "--octoprint", octoprint_url,
+    args = [sys.executable, "-m", "octoprint_printwatch.demo.webcam_server", "--port", str(port), "--octoprint", octoprint_url,
             "--apikey", ADMIN_KEY, "--part", PART, "--rig", RIG, "--seed", str(SEED), "--scenario", scenario]
     if onset_layer is not None:
         args += ["--onset-layer", str(onset_layer)]

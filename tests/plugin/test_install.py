@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from octoprint_server import OctoPrintServer
+from octoprint_printwatch.demo.octoprint_server import OctoPrintServer
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 

@@ -1,8 +1,8 @@
 """A real OctoPrint, the virtual printer, simulated webcams following the real job: the plugin end to end.
 
 Each test starts ``octoprint serve`` in a throwaway base folder (see
-``octoprint_server.py``) with PrintWatch configured for two simulated webcams
-(``webcam_server.py``), uploads a real PrusaSlicer file (PrintWatch injects the
+``octoprint_printwatch/demo/octoprint_server.py``) with PrintWatch configured for two simulated webcams
+(``octoprint_printwatch/demo/webcam_server.py``), uploads a real PrusaSlicer file (PrintWatch injects the
 checks on upload) and prints it on the virtual printer, sped up with ``M220``.
 """
 from __future__ import annotations
@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 import requests
 
-from octoprint_server import VIEWER_KEY, PushListener
+from octoprint_printwatch.demo.octoprint_server import VIEWER_KEY, PushListener
 from stack import PART, printwatch_stack, start_print, wait_print_end
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]

@@ -12,7 +12,7 @@ test: a plugin that checks at the wrong moment gets the wrong picture.
 Options make a camera dead (``--dead cam1``: the request hangs past any
 timeout) and inject a failure (``--scenario runout --onset-layer 40``).
 
-Run: ``python tests/plugin/webcam_server.py --port 8899 --octoprint http://127.0.0.1:5000 --apikey KEY``
+Run: ``python -m octoprint_printwatch.demo.webcam_server --port 8899 --octoprint http://127.0.0.1:5000 --apikey KEY``
 """
 from __future__ import annotations
 
