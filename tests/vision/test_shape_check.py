@@ -257,3 +257,41 @@ def test_displaced_part_finds_a_moved_part_but_not_a_brim():
     assert displaced_part(np.roll(expected, -25, axis=0), expected, reach=60, min_move=6) == (0, -25)
     # a move smaller than the limit is the alignment's business, not a detachment
     assert displaced_part(np.roll(expected, 4, axis=1), expected, reach=60, min_move=6) is None
+
+
+def test_a_part_standing_a_little_taller_than_its_outline_is_not_extra_material():
+    # The check's vertical position is its least certain (calibration, a frame taken a layer late):
+    # a sliver above the outline is tolerated, the same sliver beside the part is not.
+    expected = PART.mask()
+    everywhere = np.ones_like(expected)
+    above = expected | Box(PART.x0, PART.y0 - 8, PART.x1, PART.y0).mask()
+    beside = expected | Box(PART.x1, PART.y0, PART.x1 + 8, PART.y1).mask()
+    for observed, extra_expected in ((above, False), (beside, True)):
+        c = compare_masks(observed, ~observed, expected, expected, everywhere, ~everywhere, tolerance=2,
+                          band_reach=10, top_tolerance=4)
+        assert bool(c.extra.any()) is extra_expected
+    # without the top tolerance the sliver above would count: the tolerance is what makes the difference
+    c = compare_masks(above, ~above, expected, expected, everywhere, ~everywhere, tolerance=2, band_reach=10)
+    assert c.extra.any()
+
+
+def test_missing_is_claimed_only_where_most_of_the_parts_shades_would_show(bed):
+    # A part whose top faces look like the bed (a dark part on a dark bed seen from above) is not
+    # "missing" where the camera sees bed colour: those shades may be the part itself.
+    from octoprint_printwatch.core.shape_check import detectable_fraction
+
+    noise = {"chroma": 2.0, "bright": 3.0, "dark": 3.0}
+    bed_colour = np.array([[150, 120, 60]], np.float32)
+    four_of_five = np.array([[40, 40, 210], [45, 45, 220], [35, 35, 190], [50, 50, 230], [150, 121, 61]],
+                            np.float32)
+    assert detectable_fraction(four_of_five, bed_colour, noise, 5.0).tolist() == [0.8]
+    three_of_five = np.array([[40, 40, 210], [45, 45, 220], [35, 35, 190], [148, 118, 60], [151, 121, 61]],
+                             np.float32)
+    assert detectable_fraction(three_of_five, bed_colour, noise, 5.0).tolist() == [0.6]
+    # in a whole check, with the part gone from view (its colours known from earlier checks): a red part
+    # is missing, a part that showed the bed's colour on 2 of its 5 shades is not held to it
+    frame = camera_effects(bed)
+    red = check_shape("cam", background_of(bed), frame, regions(), palette=four_of_five)
+    camouflaged = check_shape("cam", background_of(bed), frame, regions(), palette=three_of_five)
+    assert red.missing_pct > 80 and not red.passed
+    assert camouflaged.missing_pct < 5
