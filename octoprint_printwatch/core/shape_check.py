@@ -302,7 +302,14 @@ def material_evidence(
     noise = {name: _noise_scale(cue, sample, _NOISE_FLOOR[name]) for name, cue in cues.items()}
     z = {name: cue * (1.0 / noise[name]) for name, cue in cues.items()}
     # darker than any plausible shadow is material anywhere
-    deep_dark = (luma_f < SHADOW_MIN_RATIO * lo_l) & (z["dark"] > material_factor)
+    # (on the 5x5 mean: sensor noise in a shadow on a dark bed pushes single pixels under the ratio,
+    # and closing would join them into blobs; real dark material is dark over an area)
+    deep_dark = (cv2.blur(luma_f, (5, 5)) < SHADOW_MIN_RATIO * lo_l) & (z["dark"] > material_factor)
+    # ... but with one strong light and little ambient light a shadow can be darker still: away from the
+    # part, deep dark counts only where it also brings new edges (strands, a part's outline); a shadow
+    # darkens the bed smoothly
+    edges = cv2.dilate((z["texture"] > material_factor).astype(np.uint8), _KERNEL5).astype(bool)
+    deep_dark &= prior | edges
     strong = np.maximum(z["chroma"], z["bright"])
     weak = np.maximum(z["dark"], z["texture"])
     strong_material = (strong > material_factor) | deep_dark
@@ -504,7 +511,11 @@ def band_offset(observed: np.ndarray, expected: np.ndarray, band: np.ndarray, re
         if best is None or mismatch < best or (mismatch == best and abs(s) < abs(best_s)):
             best, best_s = mismatch, s
     gain = at_zero - best
-    if best_s != 0 and gain >= 0.5 * at_zero and gain >= 0.15 * int(band.sum()):
+    # a band moved by s px leaves about s px uncovered and s px extra on each of its rows: the offset
+    # must explain most of that (not a share of the band's area, which a narrow shift of a wide part
+    # never reaches)
+    band_rows = int(np.count_nonzero(strip.any(axis=1)))
+    if best_s != 0 and gain >= 0.5 * at_zero and gain >= 0.6 * 2 * abs(best_s) * band_rows:
         return best_s
     return 0
 
@@ -600,6 +611,7 @@ def compare_masks(
     flat_max_px: float = 1e9,
     reflection: np.ndarray | None = None,
     top_tolerance: float = 0.0,
+    linked: np.ndarray | None = None,
 ) -> Comparison:
     """Missing and extra material (see module docstring); all inputs (h, w) bool, already aligned.
 
@@ -625,13 +637,24 @@ def compare_masks(
         # Something reaching in from outside the search box (the parked hotend, the gantry, a hand)
         # is not the print's: drop blobs with 15 % or more of their pixels beyond the box.
         # Only what comes from above counts as foreign: a part sliding out sideways is the print's.
-        count, labels = cv2.connectedComponents(outside.astype(np.uint8), connectivity=8)
+        # Objects are grouped on everything not confidently bed (``linked``): the parked hotend's nozzle
+        # stays one object with its dark, weakly seen body even when only the nozzle is certain material.
+        objects = outside if linked is None else (outside | (linked & ~grown))
+        count, labels = cv2.connectedComponents(objects.astype(np.uint8), connectivity=8)
         area = np.bincount(labels.ravel(), minlength=count)
         beyond = np.bincount(labels.ravel(), weights=(~search).ravel().astype(np.float64), minlength=count)
         ceiling = np.where(search.any(axis=0), np.argmax(search, axis=0), search.shape[0])
         above = np.arange(search.shape[0])[:, None] < ceiling[None, :]
         from_above = np.bincount(labels.ravel(), weights=above.ravel().astype(np.float64), minlength=count)
         foreign = (beyond >= 0.15 * np.maximum(area, 1)) & (from_above >= 0.05 * np.maximum(area, 1))
+        # ... and hangs there: the parked hotend never reaches down to the part's foot, a part that tipped
+        # over and now stands taller than the search box does
+        rows = np.flatnonzero(expected.any(axis=1))
+        if rows.size:
+            foot_zone = rows[-1] - 0.25 * (rows[-1] - rows[0])
+            lowest = np.zeros(count, np.int64)
+            np.maximum.at(lowest, labels[objects], np.nonzero(objects)[0])
+            foreign &= lowest < foot_zone
         foreign[0] = False
         outside &= ~foreign[labels]
     extra = (outside & search).astype(np.uint8)
@@ -789,7 +812,7 @@ def check_shape(
     comparison = compare_masks(observed, bed_evidence, expected_a, band_a, search_a,
                                dont_care_a, tol, band_reach=max(2 * tol, shift_bound),
                                flat_max_px=regions.flat_max_px, reflection=reflection_a,
-                               top_tolerance=tol)
+                               top_tolerance=tol, linked=~evidence.bed)
 
     # Growth since the previous check: the same camera, the same processing, so calibration and
     # alignment errors cancel; a part that stopped growing (runout, clog, spaghetti) shows none of the

@@ -295,3 +295,52 @@ def test_missing_is_claimed_only_where_most_of_the_parts_shades_would_show(bed):
     camouflaged = check_shape("cam", background_of(bed), frame, regions(), palette=three_of_five)
     assert red.missing_pct > 80 and not red.passed
     assert camouflaged.missing_pct < 5
+
+
+def test_a_shadow_darker_than_any_ambient_light_allows_is_not_extra_but_dark_strands_are(bed):
+    # one strong light, little ambient light: the part's shadow keeps 15 % of the bed's brightness
+    import cv2
+
+    shadow = np.zeros(PART.mask().shape, np.float32)
+    shadow[176:200, 150:225] = 1.0
+    shadow = cv2.GaussianBlur(shadow, (0, 0), 3)            # a soft penumbra, no new edges
+    scene = paint_part(bed, PART).astype(np.float32) * (1.0 - 0.85 * shadow[..., None])
+    r = run(bed, camera_effects(np.clip(scene, 0, 255).astype(np.uint8)))
+    assert r.passed and r.extra_pct < 0.5 * r.threshold   # (15 % when any deep dark counted anywhere)
+    # black strands in the same place (grey, no colour of their own) are material
+    tangle = paint_part(bed, PART)
+    rng = np.random.default_rng(2)
+    for _ in range(40):
+        x, y = int(rng.integers(150, 220)), int(rng.integers(178, 204))
+        cv2.line(tangle, (x, y), (x + int(rng.integers(-14, 14)), y + int(rng.integers(-8, 8))), (12, 12, 12), 3)
+    r = run(bed, camera_effects(tangle))
+    assert not r.passed and r.extra_pct > r.threshold
+
+
+def test_the_parked_hotends_nozzle_is_foreign_but_a_part_that_tipped_over_is_not():
+    # extra material entering the search box from above belongs to the hotend unless it reaches down
+    # to the part's foot (a tipped part stands on the bed); grouping follows everything not confidently bed
+    expected = PART.mask()                                  # rows 80..170
+    search = Box(50, 65, 270, 200).mask()                   # the box's ceiling is row 65
+    body = Box(150, 20, 190, 70).mask()                     # dark hotend body, weak evidence only
+    nozzle = Box(162, 66, 178, 78).mask()                   # its tip, certain material, inside the box
+    observed = expected | nozzle
+    c = compare_masks(observed, ~(observed | body), expected, expected, search, ~search, tolerance=2,
+                      band_reach=10, linked=observed | body)
+    assert not c.extra.any()
+    tipped = Box(212, 40, 240, 170).mask()                  # from above the box down to the bed
+    observed = expected | tipped
+    c = compare_masks(observed, ~observed, expected, expected, search, ~search, tolerance=2, band_reach=10,
+                      linked=observed)
+    assert c.extra.sum() > 0.5 * (tipped & search).sum()
+
+
+def test_band_offset_finds_a_small_shift_of_a_wide_part():
+    from octoprint_printwatch.core.shape_check import band_offset
+
+    wide = Box(40, 80, 280, 170)
+    expected = wide.mask()
+    band = Box(40, 80, 280, 110).mask()
+    observed = Box(40, 110, 280, 170).mask() | Box(46, 80, 286, 110).mask()  # top moved 6 px of 240
+    assert band_offset(observed, expected, band, reach=20) == 6
+    assert band_offset(expected, expected, band, reach=20) == 0
