@@ -162,7 +162,7 @@ def prepare_job(
         else:
             raise PrintWatchError("neither a model nor a G-code file: the expected part is unknown")
     notes.extend(getattr(part, "notes", []) or [])
-    cameras = dict(cameras)
+    cameras = {name: working_camera(cam, settings.working_width) for name, cam in cameras.items()}
     heights = sorted({(int(layer), float(z)) for layer, z in (check_heights or [])}, key=lambda lz: lz[1])
     views = {}
     if heights:
@@ -178,6 +178,33 @@ def prepare_job(
                    views=views, footprint=footprint, max_shift_px=max_shift, tolerance_px=tolerance, px_per_mm=scale,
                    prepare_seconds=time.perf_counter() - started, notes=notes,
                    cache_dir=Path(cache_dir) if cache_dir else None)
+
+
+def working_camera(camera: Camera, width: int) -> Camera:
+    """``camera`` for its frames resized to ``width`` px wide (same aspect ratio); unchanged for 0.
+
+    Pixel centres map as cv2.resize maps them: x' = (x + 0.5) * s - 0.5.
+    """
+    if not width or camera.width == width:
+        return camera
+    height = max(1, int(round(camera.height * width / camera.width)))
+    sx, sy = width / camera.width, height / camera.height
+    K = camera.K.astype(float).copy()
+    K[0, 0] *= sx
+    K[0, 1] *= sx
+    K[1, 1] *= sy
+    K[0, 2] = (K[0, 2] + 0.5) * sx - 0.5
+    K[1, 2] = (K[1, 2] + 0.5) * sy - 0.5
+    return Camera(camera.name, width, height, K, camera.dist.copy(), camera.rvec.copy(), camera.tvec.copy())
+
+
+def to_working_size(image: np.ndarray | None, camera: Camera) -> np.ndarray | None:
+    """(h, w, 3) frame resized to ``camera``'s (working) size; None stays None."""
+    if image is None or image.shape[:2] == (camera.height, camera.width):
+        return image
+    shrink = image.shape[1] > camera.width
+    return cv2.resize(image, (camera.width, camera.height),
+                      interpolation=cv2.INTER_AREA if shrink else cv2.INTER_LINEAR)
 
 
 def part_footprint(mesh) -> np.ndarray:
@@ -400,7 +427,9 @@ class CheckRunner:
                  backgrounds: Mapping[str, np.ndarray | None]):
         self.plan = plan
         self.settings = settings or DetectionSettings()
-        self.backgrounds = dict(backgrounds)
+        # every frame is checked at the plan's (working) camera size
+        self.backgrounds = {name: to_working_size(image, plan.cameras[name]) if name in plan.cameras else image
+                            for name, image in backgrounds.items()}
         self.previous_masks: dict[str, np.ndarray] = {}
         self.anchors: dict[str, tuple[int, int]] = {}
         self.palettes: dict[str, np.ndarray] = {}
@@ -416,6 +445,8 @@ class CheckRunner:
         started = time.perf_counter()
         cpu_started = time.process_time()
         settings = self.settings
+        frames = {name: to_working_size(image, self.plan.cameras[name]) if name in self.plan.cameras else image
+                  for name, image in frames.items()}
         shape: dict[str, ShapeResult] = {}
         errors: dict[str, float | None] = {}
         unreadable: dict[str, str] = {}

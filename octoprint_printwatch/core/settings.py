@@ -68,6 +68,11 @@ class DetectionSettings:
     #: half of them); a decisive one (part displaced, layer shift) needs one camera.
     min_failing_cameras: int = 1
 
+    #: Frames are checked at this width (px; height keeps the aspect ratio), whatever the camera gives:
+    #: every pixel-sized step (morphology, shake range, tolerances) then means the same share of the
+    #: view, and a 1080p camera costs what a 640x480 one does. 0 checks at the camera's own size.
+    working_width: int = 640
+
     def threshold_for(self, camera: str) -> float:
         """Shape threshold (percent) for one camera, honouring per-camera overrides."""
         return float(self.camera_thresholds.get(camera, self.shape_threshold_pct))
@@ -87,6 +92,11 @@ class DetectionSettings:
                 self.camera_thresholds = clean
             elif f.name in ("band_min_pixels", "min_failing_cameras"):
                 setattr(self, f.name, int(_positive(f.name, value, allow_zero=False)))
+            elif f.name == "working_width":
+                width = int(_positive(f.name, value, allow_zero=True))
+                if 0 < width < 160:
+                    raise SettingsError(f"working_width must be 0 (camera size) or at least 160 px, got {width}")
+                self.working_width = width
             else:
                 setattr(self, f.name, _positive(f.name, value, allow_zero=True))
         if self.bed_noise_factor >= self.material_noise_factor:
