@@ -350,7 +350,7 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     * or when the part stopped growing (corroborated by missing material in at least one view:
       25 % of the newest band, or half the threshold overall, in a view that saw no rise): the median over
       cameras of the observed rise of the part's upper outline since the previous check (readings below
-      -50 %, a sunk outline, left out) is below ``min_growth_pct`` of the expected rise,
+      -15 %, a sunk outline, left out) is below ``min_growth_pct`` of the expected rise,
       or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
       abstains reports no ``error_pct`` and never fails);
     * unknown when no camera and no pair gave usable evidence; ok otherwise.
@@ -366,10 +366,10 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     # A part that stopped growing stopped in every view: the growth test is decided on the median over
     # the cameras that could measure it, so one camera fooled by a top face the colour of the
     # background cannot pause a print on its own.
-    # An outline that sank by more than half the expected rise is not a part that stopped (material does
-    # not vanish): that camera was fooled at this check or the previous one (a top face the colour of what
-    # lies behind it); its reading is left out.
-    measured = {cam: r for cam, r in usable.items() if r.growth_pct is not None and r.growth_pct >= -50.0}
+    # An outline that sank is not a part that stopped (material does not vanish; a stalled part reads
+    # 0 +- one pixel step, about 15 % of a check's rise): that camera was fooled at this check or the
+    # previous one (a top face the colour of what lies behind it); readings below -15 % are left out.
+    measured = {cam: r for cam, r in usable.items() if r.growth_pct is not None and r.growth_pct >= -15.0}
     growth = [r.growth_pct for r in measured.values()]
     # ... and where the part stopped, its newest layers are missing in a view that sees no rise; without
     # that, a flat rise is a top skin closing in a colour the camera cannot tell from the bed

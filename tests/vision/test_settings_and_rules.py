@@ -105,3 +105,14 @@ def test_a_stall_needs_the_newest_layers_missing_in_a_view_that_saw_no_rise():
     closing = {"a": figures("a", growth=0.0), "b": figures("b", growth=127.0),
                "c": figures("c", growth=-100.0, missing=5.0, band_missing=26.0)}
     assert decide(closing, {}, s)[0] == "ok"
+
+
+def test_outlines_that_sank_are_camouflage_not_a_stall():
+    # a black top skin closing on a black bed: both outlines sink a little (-33 %, -20 % of the
+    # expected rise) and some of the part looks missing; a stalled part reads 0 +- a pixel step
+    s = DetectionSettings()
+    sinking = {"a": figures("a", growth=-33.0, missing=5.4, band_missing=30.0),
+               "b": figures("b", growth=-20.0, missing=2.0)}
+    assert decide(sinking, {}, s)[0] == "ok"
+    stalled = {"a": figures("a", growth=-8.0, missing=5.4, band_missing=30.0), "b": figures("b", growth=4.0)}
+    assert decide(stalled, {}, s)[0] == "fail"
