@@ -344,3 +344,15 @@ def test_band_offset_finds_a_small_shift_of_a_wide_part():
     observed = Box(40, 110, 280, 170).mask() | Box(46, 80, 286, 110).mask()  # top moved 6 px of 240
     assert band_offset(observed, expected, band, reach=20) == 6
     assert band_offset(expected, expected, band, reach=20) == 0
+
+
+def test_band_offset_sees_a_shift_through_a_camouflaged_top_face():
+    # part of the top face is not seen at all (the colour of what lies behind it): mismatch no shift
+    # removes; the band's sides still show the 7-px shift
+    from octoprint_printwatch.core.shape_check import band_offset
+
+    expected = PART.mask()
+    band = Box(110, 80, 210, 110).mask()
+    observed = Box(110, 110, 210, 170).mask() | Box(117, 80, 217, 110).mask()
+    observed[80:92, 135:185] = False                     # 12 rows of the top face unseen
+    assert band_offset(observed, expected, band, reach=20) == 7
