@@ -534,8 +534,23 @@ class CheckRunner:
             result = check.measure(frames.get(left), frames.get(right), z,
                                    mask_left=shape[left].observed_mask, mask_right=shape[right].observed_mask,
                                    shift_left=shape[left].shift_px, shift_right=shape[right].shift_px)
-            size[key] = result.to_dict()
+            size[key] = unless_both_views_grew(result.to_dict(),
+                                               [shape[name].growth_pct for name in (left, right)])
         return size
+
+
+def unless_both_views_grew(entry: dict, growth_pct: Sequence[float | None]) -> dict:
+    """A pair's size entry, abstaining instead of the seed's "nothing at the current height" (100 %) when
+    both of the pair's cameras saw the part's outline rise as the model says since the previous check
+    (``growth_pct`` >= 50 each): then the reconstruction missed the top (an outline read millimetres
+    low on a tower), not the part. Other entries are returned unchanged."""
+    if (entry.get("error_pct") is None or entry.get("width_mm") != 0.0
+            or not all(g is not None and g >= 50.0 for g in growth_pct)):
+        return entry
+    rises = ", ".join(f"{g:.0f} %" for g in growth_pct)
+    return dict(entry, error_pct=None, abstained=True,
+                reason=f"{entry.get('reason', '')}; not held: both views saw the part grow ({rises} of the "
+                       f"expected rise)")
 
 
 def _silhouette_rows(mask: np.ndarray) -> int:

@@ -211,3 +211,18 @@ def test_outline_width_is_the_distance_between_the_two_sides_medians():
     side = np.r_[np.zeros(40, int), np.ones(40, int)]
     assert _side_span(values, side) == pytest.approx(22.0, abs=0.15)
     assert values.max() - values.min() > 29.0  # what the extremes would have read
+
+
+def test_nothing_at_the_current_height_is_not_held_when_both_views_saw_the_part_grow():
+    from octoprint_printwatch.core.pipeline import unless_both_views_grew
+
+    nothing = {"width_mm": 0.0, "height_mm": None, "error_pct": 100.0, "abstained": False,
+               "reason": "nothing reconstructed at the current height (top found at 21.5 mm)"}
+    kept = unless_both_views_grew(nothing, [175.0, 143.0])
+    assert kept["abstained"] and kept["error_pct"] is None and "grow" in kept["reason"]
+    # a stalled part (one view saw no rise) or an unmeasured view keeps the seed's 100 %
+    assert unless_both_views_grew(nothing, [120.0, 10.0])["error_pct"] == 100.0
+    assert unless_both_views_grew(nothing, [120.0, None])["error_pct"] == 100.0
+    # a measured size is never touched
+    wide = {"width_mm": 31.0, "error_pct": 24.0, "abstained": False, "reason": ""}
+    assert unless_both_views_grew(wide, [100.0, 100.0]) == wide
