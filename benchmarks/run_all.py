@@ -274,7 +274,7 @@ def detection_figures(results: list[dict]) -> dict:
     return out
 
 
-STEREO_OURS = "calibrated / hybrid (default)"
+STEREO_OURS = "calibrated / planes (default)"
 STEREO_SEED = "seed rescale+shift / dense SAD 67"
 STEREO_SEED_CALIBRATED = "calibrated / dense SAD 67 (seed)"
 
