@@ -623,7 +623,10 @@ def compare_masks(
     (blobs reaching 15 % or more beyond it, from above, are something else: the hotend, the gantry),
     in blobs thicker than ~4 px that do not lie (80 % or more) inside ``dont_care``.
     The band figures count missing pixels inside the newest band and extra pixels within
-    ``band_reach`` of it.
+    ``band_reach`` of it. ``top_tolerance`` (px) widens the tolerance upwards only (the vertical
+    alignment is the least certain); ``linked`` ((h, w) bool, everything not confidently bed) groups
+    extra pixels into objects for the "from above" test, and a blob reaching the part's lowest
+    quarter is never foreign (a tipped part stands on the bed).
     """
     core = erode(expected, tolerance)
     missing = core & bed & ~observed
