@@ -27,7 +27,7 @@ import tempfile
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Sequence
 
 from ..core.errors import PrintWatchError
 
@@ -228,26 +228,42 @@ def write_config(server, rig: DemoRig, webcam_port: int) -> None:
 
 
 def start_webcams(port: int, octoprint_url: str, apikey: str, options: DemoOptions, log: Path) -> subprocess.Popen:
+    kind = "normal" if options.failure == "none" else options.failure
+    return launch_webcam_server(port, octoprint_url, apikey, part=options.part, rig="stations3", seed=options.seed,
+                                scenario=kind, onset_layer=options.onset_layer, log=log)
+
+
+def launch_webcam_server(port: int, octoprint_url: str, apikey: str, *, part: str, rig: str, seed: int,
+                         scenario: str, onset_layer: int | None = None, dead: Sequence[str] = (),
+                         log: Path | None = None, timeout_s: float = 60.0) -> subprocess.Popen:
+    """Start the simulated webcams (``demo.webcam_server``) in a subprocess and wait until they answer.
+
+    Used by the demo and by the integration tests' stack; raises :class:`DemoError` (one line, naming
+    the log) when the server exits or does not answer within ``timeout_s``.
+    """
     import requests
 
-    kind = "normal" if options.failure == "none" else options.failure
     args = [sys.executable, "-m", "octoprint_printwatch.demo.webcam_server", "--port", str(port),
-            "--octoprint", octoprint_url, "--apikey", apikey, "--part", options.part, "--rig", "stations3",
-            "--seed", str(options.seed), "--scenario", kind]
-    if options.onset_layer is not None:
-        args += ["--onset-layer", str(options.onset_layer)]
-    process = subprocess.Popen(args, stdout=open(log, "ab"), stderr=subprocess.STDOUT)
-    deadline = time.monotonic() + 60
+            "--octoprint", octoprint_url, "--apikey", apikey, "--part", part, "--rig", rig,
+            "--seed", str(seed), "--scenario", scenario]
+    if onset_layer is not None:
+        args += ["--onset-layer", str(onset_layer)]
+    for name in dead:
+        args += ["--dead", name]
+    out = open(log, "ab") if log else subprocess.DEVNULL
+    process = subprocess.Popen(args, stdout=out, stderr=subprocess.STDOUT)
+    where = f"; see {log}" if log else ""
+    deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
         if process.poll() is not None:
-            raise DemoError(f"the simulated webcams exited with status {process.returncode}; see {log}")
+            raise DemoError(f"the simulated webcams exited with status {process.returncode}{where}")
         try:
             requests.get(f"http://127.0.0.1:{port}/served", timeout=1)
             return process
         except requests.RequestException:
             time.sleep(0.3)
     stop_process(process)
-    raise DemoError(f"the simulated webcams did not answer within 60 s; see {log}")
+    raise DemoError(f"the simulated webcams did not answer within {timeout_s:g} s{where}")
 
 
 def stop_process(process: subprocess.Popen | None) -> None:

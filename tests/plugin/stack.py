@@ -9,14 +9,11 @@ calibrated cameras (calibration error included, as a user's would be).
 from __future__ import annotations
 
 import contextlib
-import subprocess
-import sys
 import time
 from pathlib import Path
 
-import requests
-
 from octoprint_printwatch.demo.octoprint_server import ADMIN_KEY, OctoPrintServer, free_port
+from octoprint_printwatch.demo.run import launch_webcam_server, stop_process
 
 PART = "cube"
 RIG = "ring:2"
@@ -44,31 +41,12 @@ def printwatch_settings(webcam_port: int, *, every_layers: int = 20, timeout_s: 
 @contextlib.contextmanager
 def webcam_server(port: int, octoprint_url: str, *, scenario: str = "normal", onset_layer: int | None = None,
                   dead: list[str] = (), log: Path | None = None):
-    args = [sys.executable, "-m", "octoprint_printwatch.demo.webcam_server", "--port", str(port), "--octoprint", octoprint_url,
-            "--apikey", ADMIN_KEY, "--part", PART, "--rig", RIG, "--seed", str(SEED), "--scenario", scenario]
-    if onset_layer is not None:
-        args += ["--onset-layer", str(onset_layer)]
-    for name in dead:
-        args += ["--dead", name]
-    out = open(log, "ab") if log else subprocess.DEVNULL
-    process = subprocess.Popen(args, stdout=out, stderr=subprocess.STDOUT)
+    process = launch_webcam_server(port, octoprint_url, ADMIN_KEY, part=PART, rig=RIG, seed=SEED,
+                                   scenario=scenario, onset_layer=onset_layer, dead=dead, log=log)
     try:
-        deadline = time.monotonic() + 30
-        while time.monotonic() < deadline:
-            if process.poll() is not None:
-                raise RuntimeError(f"webcam server exited with {process.returncode}")
-            try:
-                requests.get(f"http://127.0.0.1:{port}/served", timeout=1)
-                break
-            except requests.RequestException:
-                time.sleep(0.2)
         yield process
     finally:
-        process.terminate()
-        try:
-            process.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            process.kill()
+        stop_process(process)
 
 
 @contextlib.contextmanager
