@@ -516,7 +516,8 @@ class CheckRunner:
             if check is None:
                 check = PairSizeCheck(self.plan.cameras[left], self.plan.cameras[right], self.plan.part.mesh,
                                       self.plan.footprint,
-                                      SizeSettings(threshold_pct=self.settings.size_threshold_pct),
+                                      SizeSettings(threshold_pct=self.settings.size_threshold_pct,
+                                                   flat_margin_mm=self.settings.bed_marks_margin_mm),
                                       self.backgrounds.get(left), self.backgrounds.get(right))
                 self.size_checks[key] = check
 

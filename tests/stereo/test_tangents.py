@@ -172,3 +172,38 @@ def test_other_frame_sizes_measure_the_same(size):
     assert result.width_mm == pytest.approx(result.expected_width_mm, rel=0.02)
     stopped = check.measure(*(render(c, *_box(10.0)) for c in (left, right)), 14.0)
     assert stopped.height_mm == pytest.approx(10.0, rel=0.03) and stopped.failed, stopped.to_dict()
+
+
+def test_a_brim_on_the_bed_beside_a_low_part_does_not_read_as_width():
+    """A camera looking steeply down sees a low part's sides on the same rows as the brim (or skirt, or
+    shadow) lying on the bed around it: the silhouette's side there is the brim's, and read as the
+    part's it made a normal sun gear 6 mm too wide (14 %, a false pause). Where flat material on the bed
+    can show, a side edge outside the model's is not measured; the part's own side still is, and above
+    the brim's rows (a taller part) the width is measured as before."""
+    target = np.array([100.0, 100.0, 3.0])
+    camera = Camera.look_at("steep", target + [10, -110, 110], target, focal_px=800)
+    part_lo, part_hi = np.array([90.0, 92.0, 0.0]), np.array([112.0, 106.0, 6.0])
+    footprint = np.array([[90, 92], [112, 92], [112, 106], [90, 106]], float)
+    mesh = box_mesh(part_lo, part_hi)
+    brim = box_mesh(part_lo - [7.0, 7.0, 0.0], [part_hi[0] + 7.0, part_hi[1] + 7.0, 0.4])
+    part_alone = render_silhouette(mesh, camera)
+    with_brim = part_alone | render_silhouette(brim, camera)
+    check = PairSizeCheck(camera, camera, mesh, footprint, SizeSettings())
+    flat_zone = check.flat_zone["steep"]
+    sections = Sections(mesh)
+
+    def change(mask, zone, top=6.0, model=mesh):
+        return tangent_offsets(camera, mask, None, Sections(model) if model is not mesh else sections, top, 1.5,
+                               render_silhouette(model, camera, top), flat_zone=zone)
+
+    # the cause: the brim's edge taken for the part's side reads millimetres too wide
+    assert change(with_brim, None).width_change_mm > 4.0
+    # left out where the brim can show: not measured, never confidently wrong
+    guarded = change(with_brim, flat_zone)
+    assert guarded.width_change_mm is None and guarded.on_bed > 0
+    # the part alone is measured as before (its sides are where the model's are)
+    assert change(part_alone, flat_zone).width_change_mm == pytest.approx(0.0, abs=0.4)
+    # a taller part's band stands above the brim's rows: measured, brim or not
+    tall = box_mesh(part_lo, [part_hi[0], part_hi[1], 30.0])
+    tall_with_brim = render_silhouette(tall, camera) | render_silhouette(brim, camera)
+    assert change(tall_with_brim, flat_zone, top=30.0, model=tall).width_change_mm == pytest.approx(0.0, abs=0.4)

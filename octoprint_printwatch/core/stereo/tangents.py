@@ -232,6 +232,7 @@ class TangentOffsets:
     left_mm: float | None
     right_mm: float | None
     rows: int
+    on_bed: int = 0  # rows left out: the edge stood outside the model's where flat material can show
 
     @property
     def width_change_mm(self) -> float | None:
@@ -242,6 +243,7 @@ class TangentOffsets:
 
 def tangent_offsets(camera: Camera, mask: np.ndarray, diff: np.ndarray | None, sections: Sections, z_top: float,
                     band_mm: float, model_silhouette: np.ndarray | None = None, *, v_offset: float = 0.0,
+                    flat_zone: np.ndarray | None = None, flat_slack_px: float = 2.0,
                     step_mm: float = 0.1, min_rows: int = 3) -> TangentOffsets:
     """How far the silhouette's left and right edges stand outside the model's over the band
     ``[z_top - band_mm, z_top]``, converted to mm at the tangent point's distance.
@@ -251,7 +253,11 @@ def tangent_offsets(camera: Camera, mask: np.ndarray, diff: np.ndarray | None, s
     image row. The top quarter millimetre is left out (the corner's blur). ``model_silhouette``
     ((h, w) bool, the model printed up to ``z_top``): rows where another part of the model (a wider
     lower part seen beyond) forms the silhouette's edge are left out. ``v_offset``: px by which the
-    picture stands lower than the calibration says (the observed edge is read that much lower)."""
+    picture stands lower than the calibration says (the observed edge is read that much lower).
+    ``flat_zone`` ((h, w) bool, where flat material on the bed near the part -- a skirt, a brim, the
+    part's shadow -- can show): an observed edge standing more than ``flat_slack_px`` outside the
+    model's there may be that material rather than the part's side, so the row is left out; a side
+    with more such rows than measured ones is not measured (its edge is the bed's, not the part's)."""
     heights = np.arange(max(z_top - band_mm, 0.3), z_top - 0.25 + 1e-9, step_mm)
     rows, obs_left, obs_right = observed_side_edges(mask, diff)
     if len(rows) == 0 or len(heights) == 0:
@@ -259,7 +265,7 @@ def tangent_offsets(camera: Camera, mask: np.ndarray, diff: np.ndarray | None, s
     f = float(camera.K[0, 0])
     out = {}
     for side, sign, observed in (("left", -1.0, obs_left), ("right", 1.0, obs_right)):
-        offsets = []
+        offsets, on_bed = [], 0
         for h in heights:
             seg = sections.at(h)
             if len(seg) == 0:
@@ -279,11 +285,23 @@ def tangent_offsets(camera: Camera, mask: np.ndarray, diff: np.ndarray | None, s
             if at + 1 >= len(rows) or rows[at] != r0 or rows[at + 1] != r0 + 1:
                 continue
             edge = observed[at] + (v_seen - r0) * (observed[at + 1] - observed[at])  # on the same (sub-pixel) row
+            if flat_zone is not None and sign * (edge - u) > flat_slack_px and _inside(flat_zone, r0, edge):
+                on_bed += 1
+                continue
             depth = float(camera.to_camera(pts[i:i + 1])[0, 2])
             offsets.append(sign * (edge - u) * depth / f)
-        out[side] = float(np.median(offsets)) if len(offsets) >= min_rows else None
+        measured = len(offsets) >= min_rows and on_bed <= len(offsets)
+        out[side] = float(np.median(offsets)) if measured else None
         out[side + "_n"] = len(offsets)
-    return TangentOffsets(out["left"], out["right"], min(out["left_n"], out["right_n"]))
+        out[side + "_bed"] = on_bed
+    return TangentOffsets(out["left"], out["right"], min(out["left_n"], out["right_n"]),
+                          out["left_bed"] + out["right_bed"])
+
+
+def _inside(zone: np.ndarray, row: int, x: float) -> bool:
+    h, w = zone.shape
+    col = int(round(x))
+    return 0 <= row < h and 0 <= col < w and bool(zone[row, col])
 
 
 def _forms_edge(silhouette: np.ndarray, row: int, u: float, sign: float, slack_px: float = 1.5) -> bool:
