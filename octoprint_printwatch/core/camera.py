@@ -146,7 +146,7 @@ class Camera:
     # ----------------------------------------------------------- projection
     def to_camera(self, points: Any) -> np.ndarray:
         """(n, 3) printer points -> (n, 3) camera coordinates."""
-        pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        pts = np.ascontiguousarray(np.asarray(points, dtype=np.float64).reshape(-1, 3))  # (cv2 needs contiguous)
         return pts @ self.R.T + self.tvec
 
     def project(self, points: Any, *, distorted: bool = True) -> np.ndarray:
@@ -155,7 +155,7 @@ class Camera:
         With ``distorted=False`` the pixels are those of the undistorted image
         (same ``K``, no lens distortion). Points behind the camera get NaN.
         """
-        pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        pts = np.ascontiguousarray(np.asarray(points, dtype=np.float64).reshape(-1, 3))  # (cv2 needs contiguous)
         if len(pts) == 0:
             return np.zeros((0, 2))
         cam = self.to_camera(pts)

@@ -23,6 +23,7 @@ import numpy as np
 from .camera import Camera
 from .errors import PrintWatchError
 from .settings import DetectionSettings
+from .layer_shift import LayerShift, confirms_layer_shift, describe_layer_shift, estimate_layer_shift
 from .shape_check import ExpectedRegions, ShapeResult, check_shape
 
 VERDICTS = ("ok", "fail", "unknown")
@@ -123,10 +124,14 @@ class JobPlan:
             before = np.asarray(self.view(camera, previous_z).silhouette, bool)
         # (Limiting how thick a flat mark may look, ExpectedRegions.flat_max_px, was measured to
         # let brims merged with skirts through as "extra": it stays off until it is done better.)
+        centre = self.footprint.mean(axis=0)
+        at_part = cam.project(np.array([[centre[0], centre[1], z], [centre[0] + 1.0, centre[1], z],
+                                        [centre[0], centre[1] + 1.0, z]]))
+        bed_to_image = np.stack([at_part[1] - at_part[0], at_part[2] - at_part[0]], axis=1)
         return ExpectedRegions(silhouette=silhouette, new_band=band, search=search, dont_care=dont_care,
                                max_shift_px=self.max_shift_px[camera], tolerance_px=self.tolerance_px[camera],
                                px_per_mm=self.px_per_mm.get(camera, 0.0), previous_silhouette=before,
-                               reflection=reflection)
+                               reflection=reflection, bed_to_image=bed_to_image)
 
 
 def _zkey(z: float) -> float:
@@ -317,6 +322,7 @@ class CheckResult:
     unreadable: list[str] = field(default_factory=list)
     shape_seconds: float = 0.0       # the part of ``seconds`` spent in the shape checks (wall time)
     shape_cpu_seconds: float = 0.0   # CPU time of the shape checks (all threads; less sensitive to load)
+    layer_shift: LayerShift | None = None   # the newest layers' best bed shift the cameras agree on
 
     def to_json(self) -> dict:
         """The check entry of the ``printwatch evaluate`` contract (plus a ``shape`` detail block)."""
@@ -330,20 +336,28 @@ class CheckResult:
             "reasons": list(self.reasons),
             "seconds": round(self.seconds, 4),
             "shape": {cam: result.figures() for cam, result in self.shape.items()},
+            "layer_shift": None if self.layer_shift is None else self.layer_shift.figures(),
             "unreadable": list(self.unreadable),
         }
 
 
+def layer_shift_of(shape: Mapping[str, ShapeResult]) -> LayerShift | None:
+    """The bed shift of the newest layers that the usable cameras confirm together (or None)."""
+    return estimate_layer_shift({cam: r.band_shift for cam, r in shape.items()
+                                 if r.usable and r.band_shift is not None})
+
+
 def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings: DetectionSettings,
-           unreadable: Mapping[str, str] | Sequence[str] = ()) -> tuple[str, list[str]]:
+           unreadable: Mapping[str, str] | Sequence[str] = (), *,
+           layer_shift: LayerShift | None | bool = True) -> tuple[str, list[str]]:
     """The combined decision rule -> (verdict, reasons).
 
     * A camera counts only when it gave a frame and its background still matches the bed
       (``usable``); dead or disturbed cameras are reported, never a cause for a pause.
     * fail when at least half of the usable cameras (and at least ``min_failing_cameras``) fail
       their shape check (Eq. 4.1 with tolerance over its threshold, or the newest band over the
-      band threshold), or when one camera fails decisively (missing AND extra material: the part
-      moved; or the newest band offset sideways by ``layer_shift_mm``: a layer shift),
+      band threshold), or when one camera fails decisively (missing AND extra material, or the whole
+      part found elsewhere: the part moved; extra material four times the threshold),
     * while the part visibly grows (median growth >= 50 %), a camera failing on missing material
       alone does not count (a face the colour of what lies behind it looks missing); nor does missing
       material alone from no more than half of the usable cameras unless the part stalled;
@@ -353,8 +367,13 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       -15 %, a sunk outline, left out) is below ``min_growth_pct`` of the expected rise,
       or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
       abstains reports no ``error_pct`` and never fails);
+    * or when the cameras together confirm that the newest layers sit sideways on the older ones
+      (``layer_shift``: :func:`layer_shift_of`, computed here when left at True; see
+      :func:`core.layer_shift.confirms_layer_shift`);
     * unknown when no camera and no pair gave usable evidence; ok otherwise.
     """
+    if layer_shift is True:
+        layer_shift = layer_shift_of(shape)
     if not isinstance(unreadable, Mapping):
         unreadable = {cam: "no frame (camera unavailable)" for cam in unreadable}
     reasons: list[str] = [f"{cam}: {why}: no verdict from this camera" for cam, why in unreadable.items()]
@@ -414,6 +433,9 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
                             f"{float(np.median(growth)):.0f}% of the expected rise seen "
                             f"(median of {len(growth)} camera(s), limit {settings.min_growth_pct:g}%): "
                             f"runout, clog or a stopped print?")
+    if isinstance(layer_shift, LayerShift) and confirms_layer_shift(layer_shift, settings.layer_shift_mm):
+        fail_reasons.append(describe_layer_shift(layer_shift))
+        shape_fail = True
     if shape_fail or size_fail or stalled:
         return "fail", fail_reasons + size_fail + reasons
     return "ok", reasons
@@ -432,10 +454,11 @@ class CheckRunner:
                             for name, image in backgrounds.items()}
         self.previous_masks: dict[str, np.ndarray] = {}
         self.anchors: dict[str, tuple[int, int]] = {}
+        # per camera: the (k, 2) shifts no passing check so far could tell apart (each narrows them)
+        self.shift_candidates: dict[str, np.ndarray] = {}
         self.palettes: dict[str, np.ndarray] = {}
         self.frozen: set[str] = set()
         self.last_observed: dict[str, np.ndarray] = {}
-        self.last_offsets: dict[str, float | None] = {}
         self.previous_z: float | None = None
         self.keep_pictures = True
         self.size_checks: dict = {}  # "left+right" -> stereo.PairSizeCheck, kept for the whole print
@@ -458,8 +481,8 @@ class CheckRunner:
                 errors[name] = None
                 continue
             regions = self.plan.regions(name, z, settings, self.previous_z)
-            result = check_shape(
-                name, background, frame, regions,
+            shape_args = dict(
+                camera=name, background=background, frame=frame, regions=regions,
                 threshold=settings.threshold_for(name),
                 band_threshold=settings.band_threshold_pct,
                 # the band rule needs the same share of a view at any resolution
@@ -468,7 +491,6 @@ class CheckRunner:
                 bed_factor=settings.bed_noise_factor,
                 max_changed_bed_fraction=settings.max_changed_bed_fraction,
                 layer_shift_mm=settings.layer_shift_mm,
-                previous_offset_mm=self.last_offsets.get(name),
                 last_observed=self.last_observed.get(name),
                 previous_mask=self.previous_masks.get(name),
                 anchor=self.anchors.get(name),
@@ -476,13 +498,16 @@ class CheckRunner:
                 palette=self.palettes.get(name),
                 keep_pictures=self.keep_pictures,
             )
-            shape[name] = result
-            errors[name] = result.error_pct if result.usable else None
+            result = check_shape(**shape_args, candidates=self.shift_candidates.get(name), track_candidates=True)
+            shape[name] = self._second_look(name, result, shape_args) or result
+            errors[name] = shape[name].error_pct if result.usable else None
             if result.usable:
                 self.last_observed[name] = result.observed_mask
-                self.last_offsets[name] = result.band_offset_mm
             if result.palette is not None and result.usable and result.passed:
                 self.palettes[name] = result.palette
+            if result.usable and result.passed and result.shift_candidates is not None \
+                    and len(result.shift_candidates):
+                self.shift_candidates[name] = result.shift_candidates
             if result.usable and result.passed:
                 self.previous_masks[name] = result.observed_mask
                 # Calibration error does not change during a print: once the part is tall enough in
@@ -495,12 +520,39 @@ class CheckRunner:
         shape_seconds = time.perf_counter() - started
         shape_cpu_seconds = time.process_time() - cpu_started
         size = self._size_check(z, frames, shape)
-        verdict, reasons = decide(shape, size, settings, unreadable)
+        layer_shift = layer_shift_of(shape)
+        verdict, reasons = decide(shape, size, settings, unreadable, layer_shift=layer_shift)
         self.previous_z = z
         return CheckResult(layer=int(layer), z=float(z), verdict=verdict, shape_error_pct=errors, shape=shape,
                            size=size, reasons=reasons, seconds=time.perf_counter() - started,
-                           unreadable=list(unreadable), shape_seconds=shape_seconds,
+                           unreadable=list(unreadable), shape_seconds=shape_seconds, layer_shift=layer_shift,
                            shape_cpu_seconds=shape_cpu_seconds)
+
+    def _second_look(self, name: str, result: ShapeResult, shape_args: dict) -> ShapeResult | None:
+        """The camera's check again at the best of the shifts earlier checks could not tell apart, when it
+        failed in a way a misplaced outline explains and nothing moved; the new result if it passes
+        clearly, else None.
+
+        A flat first layer with a brim fits the outline anywhere along the brim, and the anchor the first
+        checks leave may sit several pixels off; a later, taller check then shows the part's side beyond
+        the outline as "extra". Only that failure gets a second look: extra material alone (nothing missing,
+        not decisive, no newest-band failure), the material seen at the previous check still seen (a part
+        that slid or was knocked off is not in place), the shift among those no passing check could tell
+        apart, and the check passing there with half the threshold to spare. It changes nothing kept for
+        later checks (anchor, candidates, masks): it can turn a failing camera into a passing one, never
+        the other way round.
+        """
+        threshold = self.settings.threshold_for(name)
+        if (not result.usable or result.passed or result.decisive or result.best_candidate is None
+                or result.best_candidate == result.shift_px or name not in self.shift_candidates
+                or result.missing_pct >= threshold / 3.0
+                or (result.band_error_pct is not None and result.band_error_pct > self.settings.band_threshold_pct)
+                or not _still_in_place(result.observed_mask, self.last_observed.get(name))):
+            return None
+        second = check_shape(**dict(shape_args, anchor=result.best_candidate, max_drift=0))
+        if second.usable and second.passed and second.error_pct <= threshold / 2.0:
+            return second
+        return None
 
     def _size_check(self, z: float, frames: Mapping[str, np.ndarray | None],
                     shape: Mapping[str, ShapeResult]) -> dict[str, dict]:
@@ -552,6 +604,14 @@ def unless_both_views_grew(entry: dict, growth_pct: Sequence[float | None]) -> d
     return dict(entry, error_pct=None, abstained=True,
                 reason=f"{entry.get('reason', '')}; not held: both views saw the part grow ({rises} of the "
                        f"expected rise)")
+
+
+def _still_in_place(observed: np.ndarray | None, before: np.ndarray | None, share: float = 0.9) -> bool:
+    """Whether at least ``share`` of the material seen at the previous check (``before``, (h, w) bool) is
+    still seen now (``observed``). A part that slid or was knocked off is not."""
+    if observed is None or before is None or before.shape != observed.shape or not before.any():
+        return False
+    return np.count_nonzero(observed & before) >= share * np.count_nonzero(before)
 
 
 def _silhouette_rows(mask: np.ndarray) -> int:

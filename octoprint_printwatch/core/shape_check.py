@@ -37,6 +37,9 @@ from functools import cached_property
 import cv2
 import numpy as np
 
+from .layer_shift import BandShift, band_shift
+from .masks import bounding_box, dilate, disk, erode, shift_mask  # noqa: F401  (re-exported)
+
 #: Shadows keep at least this fraction of the bed's brightness; darker than that is material anywhere.
 SHADOW_MIN_RATIO = 0.35
 #: Noise floors (grey levels / chromaticity units) so a perfectly clean synthetic image still has a scale.
@@ -69,6 +72,8 @@ class ExpectedRegions:
     previous_silhouette : the expected silhouette at the previous check height (growth test), or None.
     flat_max_px : how thick (px) something lying flat in the bed-marks zone can look from this camera.
     reflection : (h, w) bool or None, the part's mirror image below the bed (any thickness is ignored there).
+    bed_to_image : (2, 2) image px per mm of printer X (column 0) and Y (column 1) at the part's centre at
+        this height, or None: how a layer shift on the bed moves in this image.
     """
 
     silhouette: np.ndarray
@@ -81,6 +86,7 @@ class ExpectedRegions:
     previous_silhouette: np.ndarray | None = None   # the expected silhouette at the previous check
     flat_max_px: float = 1e9   # thickest blob (px) that can still be a flat mark on the bed
     reflection: np.ndarray | None = None   # where the part's mirror image in a glossy bed can appear
+    bed_to_image: np.ndarray | None = None   # (2, 2) image px per printer X/Y mm at the part (layer-shift test)
 
 
 @dataclass
@@ -120,7 +126,6 @@ class ShapeResult:
     band_missing_pct: float | None
     band_pixels: int
     expected_pixels: int
-    band_offset_mm: float | None  # how far the newest layers sit sideways from where they belong (None: not measured)
     growth_pct: float | None      # of the new material expected since the previous check (where it would show), % seen
     shift_px: tuple[int, int]      # (dx, dy) applied to the expected silhouette
     threshold: float
@@ -128,11 +133,16 @@ class ShapeResult:
     passed: bool
     usable: bool = True
     reasons: list[str] = field(default_factory=list)
-    #: failed with a signature no nuisance produces (part displaced: missing AND extra; newest layers
-    #: offset sideways): one camera is enough for the combined rule
+    #: failed with a signature no nuisance produces (part displaced: missing AND extra, or found
+    #: elsewhere; massive extra material): one camera is enough for the combined rule
     decisive: bool = False
     changed_bed_fraction: float = 0.0
+    band_shift: "BandShift | None" = None   # the best layer-shift hypothesis tested (None: not tested)
     observed_mask: np.ndarray | None = field(default=None, repr=False)   # (h, w) bool, full frame
+    #: (k, 2) int (dx, dy): the shifts this check could not tell apart, within the ``candidates`` given
+    #: (see align_candidates), and the best of them; None when not asked for
+    shift_candidates: np.ndarray | None = field(default=None, repr=False)
+    best_candidate: tuple[int, int] | None = None
     palette: np.ndarray | None = field(default=None, repr=False)         # (k, 3) the part's colours seen now
     # pieces the overlay is drawn from (kept so the picture costs nothing unless asked for)
     _frame: np.ndarray | None = field(default=None, repr=False)
@@ -159,9 +169,9 @@ class ShapeResult:
             "extra_pct": round(self.extra_pct, 2),
             "band_error_pct": None if self.band_error_pct is None else round(self.band_error_pct, 2),
             "band_missing_pct": None if self.band_missing_pct is None else round(self.band_missing_pct, 2),
-            "band_offset_mm": None if self.band_offset_mm is None else round(self.band_offset_mm, 2),
             "growth_pct": None if self.growth_pct is None else round(self.growth_pct, 1),
             "shift_px": list(self.shift_px),
+            "band_shift": None if self.band_shift is None else self.band_shift.figures(),
             "threshold": self.threshold,
             "passed": self.passed,
             "usable": self.usable,
@@ -169,54 +179,6 @@ class ShapeResult:
 
 
 # ------------------------------------------------------------------- helpers
-def disk(radius: float) -> np.ndarray:
-    r = max(0, int(round(radius)))
-    return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
-
-
-def dilate(mask: np.ndarray, radius: float) -> np.ndarray:
-    """(h, w) bool grown by ``radius`` px (Euclidean; a distance transform, so large radii cost no more)."""
-    if radius < 0.5:
-        return mask.astype(bool)
-    if radius <= 2.5:
-        return cv2.dilate(mask.astype(np.uint8), disk(radius)).astype(bool)
-    if not mask.any():
-        return np.zeros(mask.shape, bool)
-    return cv2.distanceTransform((~mask.astype(bool)).astype(np.uint8), cv2.DIST_L2, 3) <= radius
-
-
-def erode(mask: np.ndarray, radius: float) -> np.ndarray:
-    """(h, w) bool shrunk by ``radius`` px; the image border does not erode."""
-    if radius < 0.5:
-        return mask.astype(bool)
-    if radius <= 2.5:
-        return cv2.erode(mask.astype(np.uint8), disk(radius), borderType=cv2.BORDER_REPLICATE).astype(bool)
-    padded = cv2.copyMakeBorder(mask.astype(np.uint8), 1, 1, 1, 1, cv2.BORDER_REPLICATE)
-    return cv2.distanceTransform(padded, cv2.DIST_L2, 3)[1:-1, 1:-1] > radius
-
-
-def shift_mask(mask: np.ndarray, dx: int, dy: int) -> np.ndarray:
-    """(h, w) bool moved by (dx, dy) pixels, zeros shifted in."""
-    if dx == 0 and dy == 0:
-        return mask
-    out = np.zeros_like(mask)
-    h, w = mask.shape
-    ys, yd = (slice(0, h - dy), slice(dy, h)) if dy >= 0 else (slice(-dy, h), slice(0, h + dy))
-    xs, xd = (slice(0, w - dx), slice(dx, w)) if dx >= 0 else (slice(-dx, w), slice(0, w + dx))
-    out[yd, xd] = mask[ys, xs]
-    return out
-
-
-def bounding_box(mask: np.ndarray, pad: int = 0) -> tuple[int, int, int, int] | None:
-    """(y0, y1, x0, x1) half-open box around the True pixels, padded and clipped; None if empty."""
-    rows = np.flatnonzero(mask.any(axis=1))
-    if rows.size == 0:
-        return None
-    cols = np.flatnonzero(mask.any(axis=0))
-    h, w = mask.shape
-    return (max(0, rows[0] - pad), min(h, rows[-1] + 1 + pad), max(0, cols[0] - pad), min(w, cols[-1] + 1 + pad))
-
-
 def _luma_chroma(image: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(h, w, 3) float32 BGR -> luma (h, w) and two shading-invariant chromaticity channels (h, w).
 
@@ -462,6 +424,57 @@ def _overlap_map(padded: np.ndarray, template: np.ndarray, s: int) -> np.ndarray
     return full
 
 
+#: Shifts within this share of the template's area of the best overlap are ones the image cannot tell apart.
+PLATEAU_SHARE = 0.02
+
+
+def align_candidates(
+    observed: np.ndarray,
+    expected: np.ndarray,
+    max_shift: int,
+    *,
+    candidates: np.ndarray | None = None,
+    max_drift: int = 2,
+) -> tuple[tuple[int, int] | None, np.ndarray]:
+    """The shifts of ``expected`` onto ``observed`` (both (h, w) bool) that this check cannot tell apart,
+    and the best of them: ((dx, dy) or None, (k, 2) int array of (dx, dy)).
+
+    Searched within ``max_shift`` px of zero and, when ``candidates`` ((k, 2) int: what earlier checks
+    could not tell apart) are given, within ``max_drift`` px (per axis) of one of them. The set is every
+    shift whose overlap is within PLATEAU_SHARE of the template's area of the best overlap; the best is
+    the one with the best overlap less the Gaussian prior of :func:`align_expected`. The overlap is exact
+    at every shift (cv2.matchTemplate).
+    """
+    box = bounding_box(expected)
+    none = np.zeros((0, 2), int)
+    if box is None or max_shift <= 0 or not observed.any():
+        return None, none if candidates is None else np.asarray(candidates, int).reshape(-1, 2)
+    s = int(max_shift)
+    y0, y1, x0, x1 = box
+    h, w = observed.shape
+    padded = np.zeros((y1 - y0 + 2 * s, x1 - x0 + 2 * s), np.float32)
+    sy0, sy1, sx0, sx1 = max(0, y0 - s), min(h, y1 + s), max(0, x0 - s), min(w, x1 + s)
+    padded[sy0 - (y0 - s): sy1 - (y0 - s), sx0 - (x0 - s): sx1 - (x0 - s)] = observed[sy0:sy1, sx0:sx1]
+    template = expected[y0:y1, x0:x1].astype(np.float32)
+    overlap = cv2.matchTemplate(padded, template, cv2.TM_CCORR)   # (2s+1, 2s+1), index = shift + s
+    dys, dxs = np.mgrid[-s: s + 1, -s: s + 1]
+    allowed = dxs * dxs + dys * dys <= s * s
+    if candidates is not None:
+        c = np.asarray(candidates, int).reshape(-1, 2)
+        c = c[(np.abs(c[:, 0]) <= s) & (np.abs(c[:, 1]) <= s)]
+        near = np.zeros(allowed.shape, np.uint8)
+        near[c[:, 1] + s, c[:, 0] + s] = 1
+        allowed &= cv2.dilate(near, np.ones((2 * max_drift + 1, 2 * max_drift + 1), np.uint8)) > 0
+    if not allowed.any():
+        return None, none
+    area = float(template.sum())
+    fits = allowed & (overlap >= float(overlap[allowed].max()) - PLATEAU_SHARE * area)
+    sigma = max(s / 2.5, 1.0)
+    score = np.where(fits, overlap - 0.01 * ((dxs * dxs + dys * dys) / (sigma * sigma)) * area, -np.inf)
+    iy, ix = np.unravel_index(int(np.argmax(score)), score.shape)
+    return (int(dxs[iy, ix]), int(dys[iy, ix])), np.stack([dxs[fits], dys[fits]], axis=1)
+
+
 def upper_profile(mask: np.ndarray) -> np.ndarray:
     """(w,) float: row of the top-most True pixel of each column, NaN for empty columns."""
     has = mask.any(axis=0)
@@ -485,41 +498,6 @@ def _profile_cost(observed: np.ndarray, expected: np.ndarray, dxs: np.ndarray, d
         diff = np.where(np.isnan(diff), cap, np.minimum(diff, cap))
         costs[i] = diff.mean() if diff.size else cap
     return costs
-
-
-def band_offset(observed: np.ndarray, expected: np.ndarray, band: np.ndarray, reach: int) -> int:
-    """Horizontal offset (px) of the newest band relative to the (aligned) older part, or 0.
-
-    For each offset s within ``reach`` the silhouette "older part + band moved by s" is compared
-    with what is observed, over the band's rows; the best s is returned when it removes at least
-    35 % of the mismatch at s = 0 and half of the 2|s| px per row a true shift explains, else 0. A runout
-    (band absent) or a normal band (best at 0) gives 0; spaghetti may give anything, and fails anyway.
-    """
-    rows = np.flatnonzero(band.any(axis=1))
-    if rows.size == 0 or reach < 1:
-        return 0
-    r0, r1 = max(0, rows[0] - 2), min(band.shape[0], rows[-1] + 3)
-    older = (expected & ~band)[r0:r1]
-    seen = observed[r0:r1]
-    strip = band[r0:r1]
-    best_s, best, at_zero = 0, None, None
-    for s in range(-reach, reach + 1):
-        moved = shift_mask(strip, s, 0)
-        mismatch = int(np.count_nonzero(seen ^ (older | moved)))
-        if s == 0:
-            at_zero = mismatch
-        if best is None or mismatch < best or (mismatch == best and abs(s) < abs(best_s)):
-            best, best_s = mismatch, s
-    gain = at_zero - best
-    # A band moved by s px leaves about s px uncovered and s px extra on each of its rows: the offset must
-    # explain half of that (not a share of the band's area, which a narrow shift of a wide part never
-    # reaches), and a good part of all the mismatch (a top face's camouflage adds mismatch no shift
-    # removes). Measured on 923 normal camera-checks (benchmark, hold-outs 1-4): none passes both;
-    # the largest were 0.51 / 0.49 (a pyramid's tip).
-    band_rows = int(np.count_nonzero(strip.any(axis=1)))
-    if best_s != 0 and gain >= 0.35 * at_zero and gain >= 0.5 * 2 * abs(best_s) * band_rows:
-        return best_s
-    return 0
 
 
 def profile_growth(observed: np.ndarray, previous: np.ndarray, expected: np.ndarray,
@@ -722,21 +700,22 @@ def check_shape(
     bed_factor: float = 2.5,
     max_changed_bed_fraction: float = 0.35,
     layer_shift_mm: float = 1.5,
-    previous_offset_mm: float | None = None,
     previous_mask: np.ndarray | None = None,
     last_observed: np.ndarray | None = None,
     anchor: tuple[int, int] | None = None,
     max_drift: int = 2,
     palette: np.ndarray | None = None,
     keep_pictures: bool = True,
+    candidates: np.ndarray | None = None,
+    track_candidates: bool = False,
 ) -> ShapeResult:
     """Shape check of one camera (module docstring). Images (h, w, 3) uint8 BGR of the camera's size.
 
     ``previous_mask``, ``anchor`` and ``palette`` carry what the previous checks of this camera
     learnt (its last passing material mask, its alignment shift, the part's colours);
-    ``last_observed`` is the material mask of the previous check, for the growth test, and
-    ``previous_offset_mm`` its band offset: a layer shift persists (every later layer is printed
-    shifted), so an offset counts when it is seen twice in a row or is twice the limit.
+    ``last_observed`` is the material mask of the previous check, for the growth test.
+    ``layer_shift_mm`` is the smallest shift the layer-shift test looks for (its per-camera evidence,
+    ``band_shift``, is pooled over the cameras by ``core.layer_shift.estimate_layer_shift``).
     """
     h, w = regions.silhouette.shape
     if frame.shape[:2] != (h, w):
@@ -748,7 +727,7 @@ def check_shape(
     tol = float(regions.tolerance_px)
     expected_pixels = int(expected_full.sum())
     if expected_pixels == 0:
-        return ShapeResult(camera, 0.0, 0.0, 0.0, 0.0, None, None, 0, 0, None, None, (0, 0), threshold,
+        return ShapeResult(camera, 0.0, 0.0, 0.0, 0.0, None, None, 0, 0, None, (0, 0), threshold,
                            band_threshold,
                            passed=True, usable=False,
                            reasons=[f"{camera}: the part is not in view at this height"])
@@ -788,6 +767,11 @@ def check_shape(
     template = older if older.sum() >= 0.3 * expected.sum() else expected
     dx, dy = align_expected(anchor_mask & prior, template, shift_bound, anchor=anchor, max_drift=max_drift,
                             profile_of=expected if anchor is None else None)
+    # the shifts this check cannot tell apart, within those earlier checks could not (the per-print
+    # state in pipeline.CheckRunner); they decide nothing here
+    best_candidate, shift_candidates = (align_candidates(anchor_mask & prior, template, shift_bound,
+                                                         candidates=candidates)
+                                        if track_candidates else (None, None))
     expected_a = shift_mask(expected, dx, dy)
     band_a = shift_mask(band, dx, dy)
     # weak cues (darkening, texture) vouch for the part where it is expected, never for extra material
@@ -836,13 +820,19 @@ def check_shape(
     extra_pct = 100.0 * int(comparison.extra.sum()) / n
     error_pct = missing_pct + extra_pct
     raw_error_pct = 100.0 * comparison.raw_diff_pixels / n
-    band_error = band_missing = band_offset_mm = None
+    band_error = band_missing = shifted_band = None
     if comparison.band_core_pixels >= band_min_pixels:
         band_missing = 100.0 * comparison.band_missing / comparison.band_pixels
         band_error = 100.0 * (comparison.band_missing + comparison.band_extra) / comparison.band_pixels
         if regions.px_per_mm > 0:
-            offset_px = band_offset(observed, expected_a, band_a, int(np.ceil(8.0 * regions.px_per_mm)))
-            band_offset_mm = abs(offset_px) / regions.px_per_mm
+            reach = int(np.ceil(8.0 * regions.px_per_mm))
+            before_band = (shift_mask(regions.previous_silhouette[crop].astype(bool), dx, dy)
+                           if regions.previous_silhouette is not None else expected_a & ~band_a)
+            shifted_band = band_shift(observed, bed_evidence, before_band, band_a, reach, reach // 2,
+                                      int(np.ceil(layer_shift_mm * regions.px_per_mm)), tol,
+                                      undecided=dont_care_a if reflection_a is None else dont_care_a | reflection_a)
+            if shifted_band is not None:
+                shifted_band.bed_to_image = regions.bed_to_image
 
     # A part knocked off its place: most of the outline is empty, and the whole part stands elsewhere
     # (perhaps inside the bed-marks zone, where it would otherwise pass for a brim). Searched up to
@@ -879,11 +869,6 @@ def check_shape(
             passed, decisive = False, True
             reasons.append(f"{camera}: the whole part is seen {np.hypot(*moved_px) / regions.px_per_mm:.0f} mm "
                            f"away from where it belongs (detached or knocked off?)")
-        persistent = previous_offset_mm is not None and previous_offset_mm >= layer_shift_mm
-        if band_offset_mm is not None and band_offset_mm >= layer_shift_mm * (1.0 if persistent else 2.0):
-            passed, decisive = False, True
-            reasons.append(f"{camera}: the newest layers sit {band_offset_mm:.1f} mm sideways from the layers "
-                           f"below (layer shift? limit {layer_shift_mm:g} mm)")
         if band_error is not None and band_error > band_threshold:
             passed = False
             what = "missing" if band_missing >= band_error - band_missing else "displaced"
@@ -896,10 +881,10 @@ def check_shape(
         camera=camera, error_pct=error_pct, raw_error_pct=raw_error_pct, missing_pct=missing_pct,
         extra_pct=extra_pct, band_error_pct=band_error, band_missing_pct=band_missing,
         band_pixels=comparison.band_pixels, expected_pixels=comparison.expected_pixels,
-        band_offset_mm=band_offset_mm, growth_pct=growth_pct, shift_px=(dx, dy),
+        growth_pct=growth_pct, shift_px=(dx, dy), band_shift=shifted_band,
         threshold=float(threshold), band_threshold=float(band_threshold), passed=passed, usable=usable,
         reasons=reasons, changed_bed_fraction=changed, observed_mask=observed_full, palette=palette_now,
-        decisive=decisive,
+        decisive=decisive, shift_candidates=shift_candidates, best_candidate=best_candidate,
     )
     if keep_pictures:
         full = np.zeros((h, w), bool)

@@ -14,14 +14,14 @@ from octoprint_printwatch.cli import main
 pytestmark = pytest.mark.slow
 
 
-def simulate(out, scenario, onset=None, look="seed", seed=3):
+def simulate(out, scenario, onset=None, look="seed", seed=3, shift_mm=None):
     from octoprint_printwatch.simulator.recording import write_recording
     from octoprint_printwatch.simulator.rig import make_rig
     from octoprint_printwatch.simulator.scenario import Scenario
     from octoprint_printwatch.simulator.scene import PrintSimulator
 
     rig = make_rig("ring", n_cameras=2, seed=seed)
-    sim = PrintSimulator("cube", rig, look, Scenario(scenario, onset_layer=onset), seed=seed)
+    sim = PrintSimulator("cube", rig, look, Scenario(scenario, onset_layer=onset, shift_mm=shift_mm), seed=seed)
     write_recording(out, sim, every_n_layers=15)
     return out
 
@@ -30,7 +30,8 @@ def simulate(out, scenario, onset=None, look="seed", seed=3):
 def recordings(tmp_path_factory):
     base = tmp_path_factory.mktemp("recordings")
     return {"normal": simulate(base / "normal", "normal"),
-            "runout": simulate(base / "runout", "runout", onset=40)}
+            "runout": simulate(base / "runout", "runout", onset=40),
+            "layer_shift": simulate(base / "layer_shift", "layer_shift", onset=40, shift_mm=(-2.0, 2.0))}
 
 
 def evaluate(path, tmp_path, *extra):
@@ -66,6 +67,19 @@ def test_runout_is_paused_within_one_check_of_onset(recordings, tmp_path):
     assert all(c["verdict"] == "ok" for c in before)
     failing = doc["checks"][layers.index(doc["first_failure_layer"])]
     assert failing["verdict"] == "fail" and failing["reasons"]
+
+
+def test_layer_shift_is_paused_and_measured_on_the_bed(recordings, tmp_path):
+    # the top of the cube printed 2 mm off in -X and +Y from layer 40: paused after the onset, never
+    # before, with the shift the two cameras agree on (printer X/Y, mm) in the reason and the JSON
+    doc = evaluate(recordings["layer_shift"], tmp_path)
+    first = doc["first_failure_layer"]
+    assert first is not None and first >= 40
+    failing = next(c for c in doc["checks"] if c["layer"] == first)
+    assert any("layer shift" in reason for reason in failing["reasons"])
+    dx, dy = failing["layer_shift"]["shift_mm"]
+    assert abs(dx - -2.0) <= 1.5 and abs(dy - 2.0) <= 1.0
+    assert all(c["verdict"] == "ok" for c in doc["checks"] if c["layer"] < 40)
 
 
 def test_thresholds_on_the_command_line_reach_each_camera(recordings, tmp_path):

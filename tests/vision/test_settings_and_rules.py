@@ -42,7 +42,7 @@ def test_seed_rule_absorbs_scale_and_position_which_is_its_weakness():
 
 
 def shape(name, passed=True, usable=True):
-    return ShapeResult(name, 1.0 if passed else 20.0, 1.0, 0.0, 0.0, None, None, 0, 100, None, None, (0, 0), 7.0, 25.0,
+    return ShapeResult(name, 1.0 if passed else 20.0, 1.0, 0.0, 0.0, None, None, 0, 100, None, (0, 0), 7.0, 25.0,
                        passed=passed, usable=usable, reasons=[] if passed else [f"{name}: bad"])
 
 
@@ -75,7 +75,7 @@ def test_min_failing_cameras():
 def figures(name, *, missing=0.0, extra=0.0, growth=None, band_missing=0.0):
     """A ShapeResult with the figures the decision rule reads (failing when over the 7 % threshold)."""
     error = missing + extra
-    return ShapeResult(name, error, error, missing, extra, band_missing, band_missing, 500, 5000, None, growth,
+    return ShapeResult(name, error, error, missing, extra, band_missing, band_missing, 500, 5000, growth,
                        (0, 0), 7.0, 50.0, passed=error <= 7.0, usable=True,
                        reasons=[] if error <= 7.0 else [f"{name}: shape differs"])
 

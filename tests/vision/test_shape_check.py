@@ -198,18 +198,6 @@ def test_overlay_paints_missing_red_and_extra_magenta(bed):
 
 
 # ------------------------------------------------------- newest band and growth
-def test_band_offset_finds_a_shifted_top_section():
-    from octoprint_printwatch.core.shape_check import band_offset
-
-    expected = PART.mask()
-    band = Box(110, 80, 210, 110).mask()
-    observed = Box(110, 110, 210, 170).mask() | Box(118, 80, 218, 110).mask()  # top 30 rows moved 8 px
-    assert band_offset(observed, expected, band, reach=20) == 8
-    assert band_offset(expected, expected, band, reach=20) == 0            # a normal print
-    runout = Box(110, 110, 210, 170).mask()
-    assert band_offset(runout, expected, band, reach=20) == 0              # nothing there to be shifted
-
-
 def test_profile_growth_is_full_for_a_growing_part_and_nil_for_a_stalled_one():
     from octoprint_printwatch.core.shape_check import profile_growth
 
@@ -333,29 +321,6 @@ def test_the_parked_hotends_nozzle_is_foreign_but_a_part_that_tipped_over_is_not
     c = compare_masks(observed, ~observed, expected, expected, search, ~search, tolerance=2, band_reach=10,
                       linked=observed)
     assert c.extra.sum() > 0.5 * (tipped & search).sum()
-
-
-def test_band_offset_finds_a_small_shift_of_a_wide_part():
-    from octoprint_printwatch.core.shape_check import band_offset
-
-    wide = Box(40, 80, 280, 170)
-    expected = wide.mask()
-    band = Box(40, 80, 280, 110).mask()
-    observed = Box(40, 110, 280, 170).mask() | Box(46, 80, 286, 110).mask()  # top moved 6 px of 240
-    assert band_offset(observed, expected, band, reach=20) == 6
-    assert band_offset(expected, expected, band, reach=20) == 0
-
-
-def test_band_offset_sees_a_shift_through_a_camouflaged_top_face():
-    # part of the top face is not seen at all (the colour of what lies behind it): mismatch no shift
-    # removes; the band's sides still show the 7-px shift
-    from octoprint_printwatch.core.shape_check import band_offset
-
-    expected = PART.mask()
-    band = Box(110, 80, 210, 110).mask()
-    observed = Box(110, 110, 210, 170).mask() | Box(117, 80, 217, 110).mask()
-    observed[80:92, 135:185] = False                     # 12 rows of the top face unseen
-    assert band_offset(observed, expected, band, reach=20) == 7
 
 
 def test_massive_unexpected_material_is_decisive_from_one_camera(bed):

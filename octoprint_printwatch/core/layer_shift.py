@@ -1,0 +1,308 @@
+"""Layer shift: the layers printed since the previous check slid sideways on the layers below.
+
+Per camera, :func:`band_shift` tests every image shift of the newest band against what the camera
+sees (one correlation per evidence mask, so all shifts cost a few milliseconds). Across cameras,
+:func:`estimate_layer_shift` looks for the one shift on the bed (mm, printer X/Y) that the cameras
+confirm together: each camera's image shift of a bed shift D is ``J @ D`` (``J``, the camera's
+(2, 2) image pixels per bed millimetre at the part), so a camera that sees the shift sideways
+confirms it, a camera it would show to and that sees the band in place contradicts it, and a camera
+looking along it abstains. A real layer shift is one rigid move of the top of the part, the same in
+every view; an outline that sits a little off in one view (alignment, calibration, a face the
+colour of the bed) is not.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Mapping
+
+import cv2
+import numpy as np
+
+from .masks import bounding_box, dilate, erode, shift_mask
+
+#: Pooled evidence needed (share of the pixels the shift changes that confirm it) when cameras from
+#: two or more directions see the shift, and when one camera (or one stereo pair) does: nothing can
+#: contradict it then.
+SHIFT_CONFIRMED = 0.75
+SHIFT_CONFIRMED_ONE_VIEW = 0.85
+#: Cameras whose image x follows bed directions at least this far apart look from different places.
+VIEWPOINT_APART_DEG = 30.0
+#: Contradicting pixels allowed, as a share of the confirming ones.
+SHIFT_AGAINST = 0.25
+#: The shift must explain the image at least this much better than "the part stands a little taller
+#: or lower" does (the null hypothesis; both scored as support - 2 x against).
+SHIFT_OVER_NULL = 2.0
+#: Confirming pixels needed in all (at the 640-px working width: a band's edge a few px wide and tall),
+#: from several directions and from one.
+SHIFT_MIN_SUPPORT_PX = 60
+SHIFT_MIN_SUPPORT_ONE_VIEW_PX = 150
+
+
+@dataclass
+class BandShift:
+    """One camera's evidence on "the newest band was printed shifted".
+
+    dx, dy : the camera's best image shift of the band (px), with a horizontal part of at least ``min_dx``.
+    support : pixels confirming it (material where the shifted band lands and nothing was expected;
+        confident bed where the band should be and the shift uncovers it).
+    against : pixels contradicting it (the same places, the other way round).
+    moved : pixels the shift changes outside the alignment tolerance (what full evidence would be).
+    null_dy, null_score : the band's top raised (< 0) or lowered (> 0) as the image supports best, and
+        how well (support - 2 x against, like a shift): the explanation a layer shift must beat.
+    maps : (3, 2 reach_y + 1, 2 reach_x + 1) float32 support, against and moved for every shift
+        (dx, dy) = (index_x - reach_x, index_y - reach_y).
+    bed_to_image : (2, 2) image px per bed mm at the part (columns: printer X, Y), or None.
+    """
+
+    dx: int
+    dy: int
+    support: int
+    against: int
+    moved: int
+    null_dy: int = 0
+    null_score: float = 0.0
+    min_dx: int = 1
+    maps: np.ndarray | None = field(default=None, repr=False)
+    bed_to_image: np.ndarray | None = field(default=None, repr=False)
+
+    @property
+    def confirmed(self) -> float:
+        """Share of the pixels the shift changes that confirm it (0..1)."""
+        return self.support / max(self.moved, 1)
+
+    def figures(self) -> dict:
+        return {"dx": self.dx, "dy": self.dy, "support": self.support, "against": self.against,
+                "moved": self.moved}
+
+
+@dataclass
+class LayerShift:
+    """The bed shift the cameras confirm together (see module docstring).
+
+    shift_mm : (2,) printer X/Y (mm) by which the newest layers sit off.
+    support, against, moved : summed over the cameras in whose reach it lies.
+    null_score : the same cameras' best "the part stands taller or lower" explanation, summed.
+    viewpoints : how many clearly different directions (VIEWPOINT_APART_DEG) those cameras look from.
+    cameras : the cameras it shows to clearly (image shift of at least their ``min_dx``), with their px shift.
+    """
+
+    shift_mm: np.ndarray
+    support: int
+    against: int
+    moved: int
+    cameras: dict[str, tuple[int, int]]
+    null_score: float = 0.0
+    viewpoints: int = 1   # of those cameras, how many look from clearly different directions
+
+    @property
+    def score(self) -> float:
+        return self.support - 2.0 * self.against
+
+    @property
+    def confirmed(self) -> float:
+        return self.support / max(self.moved, 1)
+
+    @property
+    def magnitude_mm(self) -> float:
+        return float(np.hypot(*self.shift_mm))
+
+    def figures(self) -> dict:
+        return {"shift_mm": [round(float(v), 2) for v in self.shift_mm], "confirmed": round(self.confirmed, 3),
+                "support": self.support, "against": self.against, "moved": self.moved,
+                "null_score": round(self.null_score, 1), "viewpoints": self.viewpoints,
+                "cameras": {name: list(d) for name, d in self.cameras.items()}}
+
+
+def band_shift(observed: np.ndarray, bed: np.ndarray, before: np.ndarray, band: np.ndarray,
+               reach_x: int, reach_y: int, min_dx: int, tolerance: float,
+               undecided: np.ndarray | None = None) -> BandShift | None:
+    """Test every image shift of the newest band against what is seen (module docstring).
+
+    All masks (h, w) bool, already aligned: ``observed`` material, ``bed`` confidently empty bed
+    (camouflaged pixels are neither, and count for nothing), ``before`` the part as expected at the
+    previous check, ``band`` what was printed since. The hypothesis for a shift d is "before, plus the
+    band moved by d" (the layers printed since the previous check slid together). It is compared with
+    the null hypothesis only where the two differ, and only on decided pixels, so a top face that
+    looks like the bed, or material the shift does not move, neither helps nor hurts. Pixels within
+    ``tolerance`` of the expected outline are left out (the alignment is that uncertain), and
+    ``undecided`` pixels outside the part (where a brim, skirt or reflection may lie) count for nothing.
+
+    A part that stands a little taller or lower than the model (a camera that fires a layer late, a
+    height calibration error) also looks like a band moved up or down: the best such explanation is
+    scored too (``null_score``), and a layer shift has to beat it.
+    Returns None when the band is empty or no shift of ``min_dx`` px fits in ``reach_x``.
+    """
+    if not band.any() or reach_x < 1 or min_dx > reach_x:
+        return None
+    null_dy, null_score = _vertical_null(observed, bed, before, band, reach_y, tolerance)
+    maps = _band_shift_maps(observed, bed, before, band, reach_x, reach_y, tolerance, undecided)
+    support, against, moved = maps
+    dys, dxs = np.mgrid[-reach_y: reach_y + 1, -reach_x: reach_x + 1]
+    score = np.where(np.abs(dxs) >= min_dx, support - 2.0 * against, -np.inf)
+    iy, ix = np.unravel_index(int(np.argmax(score)), score.shape)
+    return BandShift(dx=int(dxs[iy, ix]), dy=int(dys[iy, ix]), support=int(round(float(support[iy, ix]))),
+                     against=int(round(float(against[iy, ix]))), moved=int(round(float(moved[iy, ix]))),
+                     null_dy=null_dy, null_score=null_score, min_dx=int(min_dx), maps=maps)
+
+
+def stretched(band: np.ndarray, dy: int) -> np.ndarray:
+    """(h, w) bool: the band with its top raised by -dy px (dy < 0: the part stands taller) or
+    lowered by dy px (dy > 0: shorter); its bottom, where it sits on the older layers, stays."""
+    if dy < 0:
+        # each pixel also on when the band is within -dy px below it
+        return cv2.dilate(band.astype(np.uint8), np.ones((1 - dy, 1), np.uint8), anchor=(0, 0)).astype(bool)
+    if dy > 0:
+        return band & shift_mask(band, 0, dy)
+    return band
+
+
+def _vertical_null(observed: np.ndarray, bed: np.ndarray, before: np.ndarray, band: np.ndarray,
+                   reach_y: int, tolerance: float) -> tuple[int, float]:
+    """(dy, score): the top of the band raised (dy < 0) or lowered as the image supports best, scored
+    like a shift (support - 2 x against); (0, 0.0) when no change is supported."""
+    y0, y1, x0, x1 = bounding_box(band)
+    # only the band's columns and the rows it can reach change: work on that window
+    window = (slice(max(0, y0 - reach_y - 1), min(band.shape[0], y1 + reach_y + 1)), slice(x0, x1))
+    band_w, before_w = band[window], before[window]
+    expected = before_w | band_w
+    ring = dilate(expected, tolerance) & ~erode(expected, tolerance)
+    seen = observed[window] & ~ring
+    empty = bed[window] & ~observed[window] & ~ring
+    best, best_dy = 0.0, 0
+    for dy in range(-reach_y, reach_y + 1):
+        if dy == 0:
+            continue
+        changed = (stretched(band_w, dy) ^ band_w) & ~before_w & ~ring
+        gained = changed & ~band_w
+        lost = changed & band_w
+        score = (np.count_nonzero(gained & seen) + np.count_nonzero(lost & empty)
+                 - 2.0 * (np.count_nonzero(gained & empty) + np.count_nonzero(lost & seen)))
+        if score > best:
+            best, best_dy = score, dy
+    return best_dy, float(best)
+
+
+def _band_shift_maps(observed: np.ndarray, bed: np.ndarray, before: np.ndarray, band: np.ndarray,
+                     reach_x: int, reach_y: int, tolerance: float, undecided: np.ndarray | None) -> np.ndarray:
+    """(3, 2 reach_y + 1, 2 reach_x + 1) float32: support, against and moved of :func:`band_shift` for
+    every shift; each count is a correlation of the band with one evidence mask."""
+    y0, y1, x0, x1 = bounding_box(band)
+    h, w = band.shape
+    expected = before | band
+    ring = dilate(expected, tolerance) & ~erode(expected, tolerance)
+    seen = observed & ~ring
+    empty = bed & ~observed & ~ring
+    fresh = band & ~before                       # the band where nothing older hides it
+    outside = ~expected & ~ring
+    if undecided is not None:
+        outside &= ~undecided   # (inside the part, a brim or reflection cannot be what is seen)
+    template = band[y0:y1, x0:x1].astype(np.float32)
+
+    def corr(mask: np.ndarray) -> np.ndarray:
+        """sum over the band of ``mask`` at the band's pixel + (dx, dy), for every shift"""
+        padded = np.zeros((y1 - y0 + 2 * reach_y, x1 - x0 + 2 * reach_x), np.float32)
+        sy0, sy1, sx0, sx1 = max(0, y0 - reach_y), min(h, y1 + reach_y), max(0, x0 - reach_x), min(w, x1 + reach_x)
+        padded[sy0 - (y0 - reach_y): sy1 - (y0 - reach_y), sx0 - (x0 - reach_x): sx1 - (x0 - reach_x)] = \
+            mask[sy0:sy1, sx0:sx1]
+        return cv2.matchTemplate(padded, template, cv2.TM_CCORR)
+
+    def uncovered(mask: np.ndarray) -> np.ndarray:
+        """pixels of ``mask`` (inside the band) that the shifted band no longer covers"""
+        return float(np.count_nonzero(mask)) - corr(mask)
+
+    # where the moved band lands outside the expected part: material confirms, bed contradicts;
+    # where the band should be and the moved band no longer covers: bed confirms, material contradicts
+    support = corr(seen & outside) + uncovered(fresh & empty)
+    against = corr(empty & outside) + uncovered(fresh & seen)
+    moved = corr(outside) + uncovered(fresh & ~ring)
+    return np.stack([support, against, moved]).astype(np.float32)
+
+
+def estimate_layer_shift(views: Mapping[str, BandShift], *, max_mm: float = 8.0, step_mm: float = 0.25,
+                         px_per_mm: Mapping[str, float] | None = None) -> LayerShift | None:
+    """The bed shift (printer X/Y, mm, within ``max_mm``) the cameras' evidence confirms best together.
+
+    Each camera contributes its support, against and moved pixels at its own image shift ``J @ D``
+    (nearest pixel), weighted by how clearly that shift shows sideways in it (see below); the score is
+    support - 2 x against summed over cameras. A camera without ``bed_to_image`` maps
+    printer X/Y to image x/y at ``px_per_mm`` (an approximation for synthetic tests). None when no
+    shift shows to any camera.
+    """
+    steps = np.arange(-max_mm, max_mm + 1e-9, step_mm)
+    gx, gy = np.meshgrid(steps, steps)
+    grid = np.stack([gx.ravel(), gy.ravel()], axis=1)            # (n, 2) mm
+    total = np.zeros((3, len(grid)), np.float64)
+    null = np.zeros(len(grid), np.float64)
+    clear = np.zeros(len(grid), bool)          # the shift shows clearly in at least one camera
+    shows, directions = {}, {}
+    for name, view in views.items():
+        if view is None or view.maps is None:
+            continue
+        J = view.bed_to_image
+        if J is None:
+            scale = (px_per_mm or {}).get(name, 0.0)
+            if scale <= 0:
+                continue
+            J = np.eye(2) * scale
+        _, ny, nx = view.maps.shape
+        reach_y, reach_x = ny // 2, nx // 2
+        image = np.rint(grid @ np.asarray(J, float).T).astype(int)   # (n, 2) px
+        directions[name] = float(np.arctan2(J[0][1], J[0][0]))        # the bed direction image x follows
+        ix = image[:, 0] + reach_x
+        iy = image[:, 1] + reach_y
+        ok = (ix >= 0) & (ix < nx) & (iy >= 0) & (iy < ny)
+        # A camera counts in full where the shift shows sideways by its min_dx, not at all below half of
+        # that (little but the outline's own wobble changes there), and in proportion between: a hard
+        # gate would let a shift hide from a camera that sees the band in place by staying a pixel under it.
+        weight = np.clip((np.abs(image[:, 0]) - 0.5 * view.min_dx) / (0.5 * view.min_dx), 0.0, 1.0) * ok
+        values = np.zeros((3, len(grid)))
+        values[:, ok] = view.maps[:, iy[ok], ix[ok]]
+        total += values * weight
+        null += view.null_score * weight
+        clear |= weight >= 1.0
+        shows[name] = (ok & (np.abs(image[:, 0]) >= view.min_dx), image)
+    if not shows:
+        return None
+    score = total[0] - 2.0 * total[1]
+    score[(total[2] <= 0) | ~clear] = -np.inf
+    best = int(np.argmax(score))
+    if not np.isfinite(score[best]):
+        return None
+    cameras = {name: (int(image[best, 0]), int(image[best, 1])) for name, (ok, image) in shows.items() if ok[best]}
+    return LayerShift(shift_mm=grid[best].copy(), support=int(round(total[0, best])),
+                      against=int(round(total[1, best])), moved=int(round(total[2, best])), cameras=cameras,
+                      null_score=float(null[best]),
+                      viewpoints=_viewpoints([directions[name] for name in cameras]))
+
+
+def _viewpoints(directions: list[float]) -> int:
+    """How many of the bed directions (radians, mod pi) differ from each other by VIEWPOINT_APART_DEG:
+    the two cameras of a stereo pair look from nearly one place and count once."""
+    kept: list[float] = []
+    apart = np.radians(VIEWPOINT_APART_DEG)
+    for angle in directions:
+        if all(min(abs(angle - k) % np.pi, np.pi - abs(angle - k) % np.pi) >= apart for k in kept):
+            kept.append(angle)
+    return len(kept)
+
+
+def confirms_layer_shift(shift: LayerShift, min_mm: float) -> bool:
+    """Whether the pooled evidence says the newest layers were printed shifted by ``min_mm`` or more.
+
+    The thresholds are shares of pixels (scale-free); see docs/detection.md for what they were
+    measured on.
+    """
+    several = shift.viewpoints >= 2
+    return (bool(shift.cameras) and shift.magnitude_mm >= min_mm
+            and shift.support >= (SHIFT_MIN_SUPPORT_PX if several else SHIFT_MIN_SUPPORT_ONE_VIEW_PX)
+            and shift.confirmed >= (SHIFT_CONFIRMED if several else SHIFT_CONFIRMED_ONE_VIEW)
+            and shift.against <= SHIFT_AGAINST * shift.support
+            and shift.score >= SHIFT_OVER_NULL * shift.null_score)
+
+
+def describe_layer_shift(shift: LayerShift) -> str:
+    """One line for the user: how far, which way, seen by whom."""
+    dx, dy = (float(v) for v in shift.shift_mm)
+    return (f"the newest layers sit {shift.magnitude_mm:.1f} mm sideways on the layers below "
+            f"(X {dx:+.1f} mm, Y {dy:+.1f} mm), confirmed by {', '.join(sorted(shift.cameras)) or 'the cameras'}"
+            f" ({shift.confirmed:.0%} of the evidence): layer shift?")

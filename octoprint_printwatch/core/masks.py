@@ -1,0 +1,53 @@
+"""Binary-mask helpers shared by the vision checks; every mask is (h, w) bool."""
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+
+def disk(radius: float) -> np.ndarray:
+    r = max(0, int(round(radius)))
+    return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
+
+
+def dilate(mask: np.ndarray, radius: float) -> np.ndarray:
+    """(h, w) bool grown by ``radius`` px (Euclidean; a distance transform, so large radii cost no more)."""
+    if radius < 0.5:
+        return mask.astype(bool)
+    if radius <= 2.5:
+        return cv2.dilate(mask.astype(np.uint8), disk(radius)).astype(bool)
+    if not mask.any():
+        return np.zeros(mask.shape, bool)
+    return cv2.distanceTransform((~mask.astype(bool)).astype(np.uint8), cv2.DIST_L2, 3) <= radius
+
+
+def erode(mask: np.ndarray, radius: float) -> np.ndarray:
+    """(h, w) bool shrunk by ``radius`` px; the image border does not erode."""
+    if radius < 0.5:
+        return mask.astype(bool)
+    if radius <= 2.5:
+        return cv2.erode(mask.astype(np.uint8), disk(radius), borderType=cv2.BORDER_REPLICATE).astype(bool)
+    padded = cv2.copyMakeBorder(mask.astype(np.uint8), 1, 1, 1, 1, cv2.BORDER_REPLICATE)
+    return cv2.distanceTransform(padded, cv2.DIST_L2, 3)[1:-1, 1:-1] > radius
+
+
+def shift_mask(mask: np.ndarray, dx: int, dy: int) -> np.ndarray:
+    """(h, w) bool moved by (dx, dy) pixels, zeros shifted in."""
+    if dx == 0 and dy == 0:
+        return mask
+    out = np.zeros_like(mask)
+    h, w = mask.shape
+    ys, yd = (slice(0, h - dy), slice(dy, h)) if dy >= 0 else (slice(-dy, h), slice(0, h + dy))
+    xs, xd = (slice(0, w - dx), slice(dx, w)) if dx >= 0 else (slice(-dx, w), slice(0, w + dx))
+    out[yd, xd] = mask[ys, xs]
+    return out
+
+
+def bounding_box(mask: np.ndarray, pad: int = 0) -> tuple[int, int, int, int] | None:
+    """(y0, y1, x0, x1) half-open box around the True pixels, padded and clipped; None if empty."""
+    rows = np.flatnonzero(mask.any(axis=1))
+    if rows.size == 0:
+        return None
+    cols = np.flatnonzero(mask.any(axis=0))
+    h, w = mask.shape
+    return (max(0, rows[0] - pad), min(h, rows[-1] + 1 + pad), max(0, cols[0] - pad), min(w, cols[-1] + 1 + pad))
