@@ -339,6 +339,12 @@ def watch_print(server, timeout: float, say: Callable[[str], None]) -> tuple[str
             say("  " + describe(check_line(check)))
         seen = max(seen, len(checks))
         if started and not state.startswith(RUNNING_STATES):
+            # the plugin lifts the hold before it stores the verdict: a check at the very last layer can
+            # still be finishing when the job ends
+            settle = time.monotonic() + 30.0
+            while status.get("state") == "checking" and time.monotonic() < settle:
+                time.sleep(0.3)
+                status = server.get(f"{API}/status")
             if print_id is None:
                 prints = server.get(f"{API}/prints").get("prints") or []
                 print_id = prints[0]["id"] if prints else None
