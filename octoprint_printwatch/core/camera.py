@@ -146,7 +146,7 @@ class Camera:
     # ----------------------------------------------------------- projection
     def to_camera(self, points: Any) -> np.ndarray:
         """(n, 3) printer points -> (n, 3) camera coordinates."""
-        pts = np.ascontiguousarray(np.asarray(points, dtype=np.float64).reshape(-1, 3))  # (cv2 needs contiguous)
+        pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
         return pts @ self.R.T + self.tvec
 
     def project(self, points: Any, *, distorted: bool = True) -> np.ndarray:

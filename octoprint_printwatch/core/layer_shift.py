@@ -18,7 +18,7 @@ from typing import Mapping
 import cv2
 import numpy as np
 
-from .masks import bounding_box, dilate, erode, shift_mask
+from .masks import around, bounding_box, dilate, erode, shift_mask
 
 #: Pooled evidence needed (share of the pixels the shift changes that confirm it) when cameras from
 #: two or more directions see the shift, and when one camera (or one stereo pair) does: nothing can
@@ -115,7 +115,7 @@ class LayerShift:
 
 def band_shift(observed: np.ndarray, bed: np.ndarray, before: np.ndarray, band: np.ndarray,
                reach_x: int, reach_y: int, min_dx: int, tolerance: float,
-               undecided: np.ndarray | None = None) -> BandShift | None:
+               undecided: np.ndarray | None = None, bed_to_image: np.ndarray | None = None) -> BandShift | None:
     """Test every image shift of the newest band against what is seen (module docstring).
 
     All masks (h, w) bool, already aligned: ``observed`` material, ``bed`` confidently empty bed
@@ -126,6 +126,7 @@ def band_shift(observed: np.ndarray, bed: np.ndarray, before: np.ndarray, band: 
     looks like the bed, or material the shift does not move, neither helps nor hurts. Pixels within
     ``tolerance`` of the expected outline are left out (the alignment is that uncertain), and
     ``undecided`` pixels outside the part (where a brim, skirt or reflection may lie) count for nothing.
+    ``bed_to_image`` ((2, 2), the camera's image px per printer X/Y mm) is kept for the pooling.
 
     A part that stands a little taller or lower than the model (a camera that fires a layer late, a
     height calibration error) also looks like a band moved up or down: the best such explanation is
@@ -134,15 +135,33 @@ def band_shift(observed: np.ndarray, bed: np.ndarray, before: np.ndarray, band: 
     """
     if not band.any() or reach_x < 1 or min_dx > reach_x:
         return None
-    null_dy, null_score = _vertical_null(observed, bed, before, band, reach_y, tolerance)
-    maps = _band_shift_maps(observed, bed, before, band, reach_x, reach_y, tolerance, undecided)
+    evidence = _Evidence.of(observed, bed, before | band, tolerance)
+    null_dy, null_score = _vertical_null(evidence, before, band, reach_y)
+    maps = _band_shift_maps(evidence, before, band, reach_x, reach_y, undecided)
     support, against, moved = maps
     dys, dxs = np.mgrid[-reach_y: reach_y + 1, -reach_x: reach_x + 1]
     score = np.where(np.abs(dxs) >= min_dx, support - 2.0 * against, -np.inf)
     iy, ix = np.unravel_index(int(np.argmax(score)), score.shape)
     return BandShift(dx=int(dxs[iy, ix]), dy=int(dys[iy, ix]), support=int(round(float(support[iy, ix]))),
                      against=int(round(float(against[iy, ix]))), moved=int(round(float(moved[iy, ix]))),
-                     null_dy=null_dy, null_score=null_score, min_dx=int(min_dx), maps=maps)
+                     null_dy=null_dy, null_score=null_score, min_dx=int(min_dx), maps=maps,
+                     bed_to_image=None if bed_to_image is None else np.asarray(bed_to_image, float))
+
+
+@dataclass
+class _Evidence:
+    """The decided pixels of one camera-check, (h, w) bool each: ``ring`` within the alignment
+    tolerance of the expected outline (decides nothing), ``seen`` material and ``empty`` confident bed
+    outside it."""
+
+    ring: np.ndarray
+    seen: np.ndarray
+    empty: np.ndarray
+
+    @classmethod
+    def of(cls, observed: np.ndarray, bed: np.ndarray, expected: np.ndarray, tolerance: float) -> "_Evidence":
+        ring = dilate(expected, tolerance) & ~erode(expected, tolerance)
+        return cls(ring=ring, seen=observed & ~ring, empty=bed & ~observed & ~ring)
 
 
 def stretched(band: np.ndarray, dy: int) -> np.ndarray:
@@ -156,18 +175,14 @@ def stretched(band: np.ndarray, dy: int) -> np.ndarray:
     return band
 
 
-def _vertical_null(observed: np.ndarray, bed: np.ndarray, before: np.ndarray, band: np.ndarray,
-                   reach_y: int, tolerance: float) -> tuple[int, float]:
+def _vertical_null(evidence: _Evidence, before: np.ndarray, band: np.ndarray, reach_y: int) -> tuple[int, float]:
     """(dy, score): the top of the band raised (dy < 0) or lowered as the image supports best, scored
     like a shift (support - 2 x against); (0, 0.0) when no change is supported."""
     y0, y1, x0, x1 = bounding_box(band)
     # only the band's columns and the rows it can reach change: work on that window
     window = (slice(max(0, y0 - reach_y - 1), min(band.shape[0], y1 + reach_y + 1)), slice(x0, x1))
-    band_w, before_w = band[window], before[window]
-    expected = before_w | band_w
-    ring = dilate(expected, tolerance) & ~erode(expected, tolerance)
-    seen = observed[window] & ~ring
-    empty = bed[window] & ~observed[window] & ~ring
+    band_w, before_w, ring = band[window], before[window], evidence.ring[window]
+    seen, empty = evidence.seen[window], evidence.empty[window]
     best, best_dy = 0.0, 0
     for dy in range(-reach_y, reach_y + 1):
         if dy == 0:
@@ -182,29 +197,22 @@ def _vertical_null(observed: np.ndarray, bed: np.ndarray, before: np.ndarray, ba
     return best_dy, float(best)
 
 
-def _band_shift_maps(observed: np.ndarray, bed: np.ndarray, before: np.ndarray, band: np.ndarray,
-                     reach_x: int, reach_y: int, tolerance: float, undecided: np.ndarray | None) -> np.ndarray:
+def _band_shift_maps(evidence: _Evidence, before: np.ndarray, band: np.ndarray, reach_x: int, reach_y: int,
+                     undecided: np.ndarray | None) -> np.ndarray:
     """(3, 2 reach_y + 1, 2 reach_x + 1) float32: support, against and moved of :func:`band_shift` for
     every shift; each count is a correlation of the band with one evidence mask."""
-    y0, y1, x0, x1 = bounding_box(band)
-    h, w = band.shape
-    expected = before | band
-    ring = dilate(expected, tolerance) & ~erode(expected, tolerance)
-    seen = observed & ~ring
-    empty = bed & ~observed & ~ring
+    box = bounding_box(band)
+    y0, y1, x0, x1 = box
+    ring, seen, empty = evidence.ring, evidence.seen, evidence.empty
     fresh = band & ~before                       # the band where nothing older hides it
-    outside = ~expected & ~ring
+    outside = ~(before | band) & ~ring
     if undecided is not None:
         outside &= ~undecided   # (inside the part, a brim or reflection cannot be what is seen)
     template = band[y0:y1, x0:x1].astype(np.float32)
 
     def corr(mask: np.ndarray) -> np.ndarray:
         """sum over the band of ``mask`` at the band's pixel + (dx, dy), for every shift"""
-        padded = np.zeros((y1 - y0 + 2 * reach_y, x1 - x0 + 2 * reach_x), np.float32)
-        sy0, sy1, sx0, sx1 = max(0, y0 - reach_y), min(h, y1 + reach_y), max(0, x0 - reach_x), min(w, x1 + reach_x)
-        padded[sy0 - (y0 - reach_y): sy1 - (y0 - reach_y), sx0 - (x0 - reach_x): sx1 - (x0 - reach_x)] = \
-            mask[sy0:sy1, sx0:sx1]
-        return cv2.matchTemplate(padded, template, cv2.TM_CCORR)
+        return cv2.matchTemplate(around(mask, box, reach_x, reach_y), template, cv2.TM_CCORR)
 
     def uncovered(mask: np.ndarray) -> np.ndarray:
         """pixels of ``mask`` (inside the band) that the shifted band no longer covers"""
@@ -218,15 +226,14 @@ def _band_shift_maps(observed: np.ndarray, bed: np.ndarray, before: np.ndarray, 
     return np.stack([support, against, moved]).astype(np.float32)
 
 
-def estimate_layer_shift(views: Mapping[str, BandShift], *, max_mm: float = 8.0, step_mm: float = 0.25,
-                         px_per_mm: Mapping[str, float] | None = None) -> LayerShift | None:
+def estimate_layer_shift(views: Mapping[str, BandShift], *, max_mm: float = 8.0,
+                         step_mm: float = 0.25) -> LayerShift | None:
     """The bed shift (printer X/Y, mm, within ``max_mm``) the cameras' evidence confirms best together.
 
     Each camera contributes its support, against and moved pixels at its own image shift ``J @ D``
     (nearest pixel), weighted by how clearly that shift shows sideways in it (see below); the score is
-    support - 2 x against summed over cameras. A camera without ``bed_to_image`` maps
-    printer X/Y to image x/y at ``px_per_mm`` (an approximation for synthetic tests). None when no
-    shift shows to any camera.
+    support - 2 x against summed over cameras. Cameras without ``bed_to_image`` cannot take part.
+    None when no shift shows clearly to any camera.
     """
     steps = np.arange(-max_mm, max_mm + 1e-9, step_mm)
     gx, gy = np.meshgrid(steps, steps)
@@ -236,18 +243,13 @@ def estimate_layer_shift(views: Mapping[str, BandShift], *, max_mm: float = 8.0,
     clear = np.zeros(len(grid), bool)          # the shift shows clearly in at least one camera
     shows, directions = {}, {}
     for name, view in views.items():
-        if view is None or view.maps is None:
+        if view.maps is None or view.bed_to_image is None:
             continue
         J = view.bed_to_image
-        if J is None:
-            scale = (px_per_mm or {}).get(name, 0.0)
-            if scale <= 0:
-                continue
-            J = np.eye(2) * scale
         _, ny, nx = view.maps.shape
         reach_y, reach_x = ny // 2, nx // 2
-        image = np.rint(grid @ np.asarray(J, float).T).astype(int)   # (n, 2) px
-        directions[name] = float(np.arctan2(J[0][1], J[0][0]))        # the bed direction image x follows
+        image = np.rint(grid @ J.T).astype(int)                      # (n, 2) px
+        directions[name] = float(np.arctan2(J[0, 1], J[0, 0]))        # the bed direction image x follows
         ix = image[:, 0] + reach_x
         iy = image[:, 1] + reach_y
         ok = (ix >= 0) & (ix < nx) & (iy >= 0) & (iy < ny)
@@ -304,5 +306,5 @@ def describe_layer_shift(shift: LayerShift) -> str:
     """One line for the user: how far, which way, seen by whom."""
     dx, dy = (float(v) for v in shift.shift_mm)
     return (f"the newest layers sit {shift.magnitude_mm:.1f} mm sideways on the layers below "
-            f"(X {dx:+.1f} mm, Y {dy:+.1f} mm), confirmed by {', '.join(sorted(shift.cameras)) or 'the cameras'}"
+            f"(X {dx:+.1f} mm, Y {dy:+.1f} mm), confirmed by {', '.join(sorted(shift.cameras))}"
             f" ({shift.confirmed:.0%} of the evidence): layer shift?")

@@ -51,3 +51,17 @@ def bounding_box(mask: np.ndarray, pad: int = 0) -> tuple[int, int, int, int] | 
     cols = np.flatnonzero(mask.any(axis=0))
     h, w = mask.shape
     return (max(0, rows[0] - pad), min(h, rows[-1] + 1 + pad), max(0, cols[0] - pad), min(w, cols[-1] + 1 + pad))
+
+
+def around(mask: np.ndarray, box: tuple[int, int, int, int], reach_x: int, reach_y: int) -> np.ndarray:
+    """(y1 - y0 + 2 reach_y, x1 - x0 + 2 reach_x) float32: ``mask`` around ``box`` (y0, y1, x0, x1),
+    grown by the reach on each side, zero beyond the image. ``cv2.matchTemplate(around(m, box, rx, ry),
+    template, cv2.TM_CCORR)`` with ``template`` the box's content gives, at index (dy + ry, dx + rx),
+    the sum of ``m`` under the template moved by (dx, dy): every shift at once."""
+    y0, y1, x0, x1 = box
+    h, w = mask.shape
+    out = np.zeros((y1 - y0 + 2 * reach_y, x1 - x0 + 2 * reach_x), np.float32)
+    sy0, sy1, sx0, sx1 = max(0, y0 - reach_y), min(h, y1 + reach_y), max(0, x0 - reach_x), min(w, x1 + reach_x)
+    out[sy0 - (y0 - reach_y): sy1 - (y0 - reach_y), sx0 - (x0 - reach_x): sx1 - (x0 - reach_x)] = \
+        mask[sy0:sy1, sx0:sx1]
+    return out

@@ -349,7 +349,7 @@ def layer_shift_of(shape: Mapping[str, ShapeResult]) -> LayerShift | None:
 
 def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings: DetectionSettings,
            unreadable: Mapping[str, str] | Sequence[str] = (), *,
-           layer_shift: LayerShift | None | bool = True) -> tuple[str, list[str]]:
+           layer_shift: LayerShift | None = None) -> tuple[str, list[str]]:
     """The combined decision rule -> (verdict, reasons).
 
     * A camera counts only when it gave a frame and its background still matches the bed
@@ -368,11 +368,11 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
       abstains reports no ``error_pct`` and never fails);
     * or when the cameras together confirm that the newest layers sit sideways on the older ones
-      (``layer_shift``: :func:`layer_shift_of`, computed here when left at True; see
+      (``layer_shift``: :func:`layer_shift_of`, computed here when not given; see
       :func:`core.layer_shift.confirms_layer_shift`);
     * unknown when no camera and no pair gave usable evidence; ok otherwise.
     """
-    if layer_shift is True:
+    if layer_shift is None:
         layer_shift = layer_shift_of(shape)
     if not isinstance(unreadable, Mapping):
         unreadable = {cam: "no frame (camera unavailable)" for cam in unreadable}
@@ -433,7 +433,7 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
                             f"{float(np.median(growth)):.0f}% of the expected rise seen "
                             f"(median of {len(growth)} camera(s), limit {settings.min_growth_pct:g}%): "
                             f"runout, clog or a stopped print?")
-    if isinstance(layer_shift, LayerShift) and confirms_layer_shift(layer_shift, settings.layer_shift_mm):
+    if layer_shift is not None and confirms_layer_shift(layer_shift, settings.layer_shift_mm):
         fail_reasons.append(describe_layer_shift(layer_shift))
         shape_fail = True
     if shape_fail or size_fail or stalled:

@@ -38,7 +38,7 @@ import cv2
 import numpy as np
 
 from .layer_shift import BandShift, band_shift
-from .masks import bounding_box, dilate, disk, erode, shift_mask  # noqa: F401  (re-exported)
+from .masks import around, bounding_box, dilate, disk, erode, shift_mask  # noqa: F401  (re-exported)
 
 #: Shadows keep at least this fraction of the bed's brightness; darker than that is material anywhere.
 SHADOW_MIN_RATIO = 0.35
@@ -337,6 +337,15 @@ def clean_mask(material: np.ndarray, fill_like: np.ndarray | None = None) -> np.
 
 
 # ---------------------------------------------------------- stage 2: alignment
+def _shift_prior(dxs: np.ndarray, dys: np.ndarray, max_shift: int, area: float) -> np.ndarray:
+    """Overlap (px) a shift (dx, dy) must gain to beat no shift. Calibration errors are small more often
+    than large: a Gaussian prior on the shift (``max_shift`` is 2.5 standard deviations) makes a far
+    shift win only on clearly better overlap, so a faint or partial mask cannot drag the outline across
+    the part. It also breaks ties (a runout leaves the top free to slide) towards the smallest move."""
+    sigma = max(max_shift / 2.5, 1.0)
+    return 0.01 * ((dxs * dxs + dys * dys) / (sigma * sigma)) * area
+
+
 def align_expected(
     observed: np.ndarray,
     expected: np.ndarray,
@@ -358,10 +367,7 @@ def align_expected(
         return (0, 0) if anchor is None else anchor
     y0, y1, x0, x1 = box
     s = int(max_shift)
-    h, w = observed.shape
-    padded = np.zeros((y1 - y0 + 2 * s, x1 - x0 + 2 * s), np.float32)
-    sy0, sy1, sx0, sx1 = max(0, y0 - s), min(h, y1 + s), max(0, x0 - s), min(w, x1 + s)
-    padded[sy0 - (y0 - s): sy1 - (y0 - s), sx0 - (x0 - s): sx1 - (x0 - s)] = observed[sy0:sy1, sx0:sx1]
+    padded = around(observed, box, s, s)
     template = expected[y0:y1, x0:x1].astype(np.float32)
     dys, dxs = np.mgrid[-s: s + 1, -s: s + 1]
     if anchor is not None:
@@ -379,13 +385,7 @@ def align_expected(
         allowed &= (np.abs(dxs - anchor[0]) <= max_drift) & (np.abs(dys - anchor[1]) <= max_drift)
         if not allowed.any():
             return anchor
-    # Calibration errors are small more often than large: a Gaussian prior on the shift (s is
-    # 2.5 standard deviations) makes a far shift win only on clearly better overlap, so a faint or
-    # partial mask cannot drag the outline across the part. It also breaks ties (a runout leaves
-    # the top free to slide) towards the smallest move.
-    sigma = max(s / 2.5, 1.0)
-    penalty = 0.01 * ((dxs * dxs + dys * dys) / (sigma * sigma)) * float(template.sum())
-    score = np.where(allowed, overlap - penalty, -np.inf)
+    score = np.where(allowed, overlap - _shift_prior(dxs, dys, s, float(template.sum())), -np.inf)
     if profile_of is not None:
         # Material attached to the part at bed level (brim, skirt, shadow, reflection) makes the
         # observed blob larger than the template, and the overlap is then flat wherever the template
@@ -442,7 +442,7 @@ def align_candidates(
     Searched within ``max_shift`` px of zero and, when ``candidates`` ((k, 2) int: what earlier checks
     could not tell apart) are given, within ``max_drift`` px (per axis) of one of them. The set is every
     shift whose overlap is within PLATEAU_SHARE of the template's area of the best overlap; the best is
-    the one with the best overlap less the Gaussian prior of :func:`align_expected`. The overlap is exact
+    the one with the best overlap less the Gaussian prior (:func:`_shift_prior`). The overlap is exact
     at every shift (cv2.matchTemplate).
     """
     box = bounding_box(expected)
@@ -451,10 +451,7 @@ def align_candidates(
         return None, none if candidates is None else np.asarray(candidates, int).reshape(-1, 2)
     s = int(max_shift)
     y0, y1, x0, x1 = box
-    h, w = observed.shape
-    padded = np.zeros((y1 - y0 + 2 * s, x1 - x0 + 2 * s), np.float32)
-    sy0, sy1, sx0, sx1 = max(0, y0 - s), min(h, y1 + s), max(0, x0 - s), min(w, x1 + s)
-    padded[sy0 - (y0 - s): sy1 - (y0 - s), sx0 - (x0 - s): sx1 - (x0 - s)] = observed[sy0:sy1, sx0:sx1]
+    padded = around(observed, box, s, s)
     template = expected[y0:y1, x0:x1].astype(np.float32)
     overlap = cv2.matchTemplate(padded, template, cv2.TM_CCORR)   # (2s+1, 2s+1), index = shift + s
     dys, dxs = np.mgrid[-s: s + 1, -s: s + 1]
@@ -469,8 +466,7 @@ def align_candidates(
         return None, none
     area = float(template.sum())
     fits = allowed & (overlap >= float(overlap[allowed].max()) - PLATEAU_SHARE * area)
-    sigma = max(s / 2.5, 1.0)
-    score = np.where(fits, overlap - 0.01 * ((dxs * dxs + dys * dys) / (sigma * sigma)) * area, -np.inf)
+    score = np.where(fits, overlap - _shift_prior(dxs, dys, s, area), -np.inf)
     iy, ix = np.unravel_index(int(np.argmax(score)), score.shape)
     return (int(dxs[iy, ix]), int(dys[iy, ix])), np.stack([dxs[fits], dys[fits]], axis=1)
 
@@ -541,11 +537,8 @@ def displaced_part(observed: np.ndarray, expected: np.ndarray, reach: int, min_m
     if box is None or reach < 1 or total <= 0:
         return None
     y0, y1, x0, x1 = box
-    h, w = observed.shape
     s = int(reach)
-    padded = np.zeros((y1 - y0 + 2 * s, x1 - x0 + 2 * s), np.float32)
-    sy0, sy1, sx0, sx1 = max(0, y0 - s), min(h, y1 + s), max(0, x0 - s), min(w, x1 + s)
-    padded[sy0 - (y0 - s): sy1 - (y0 - s), sx0 - (x0 - s): sx1 - (x0 - s)] = observed[sy0:sy1, sx0:sx1]
+    padded = around(observed, box, s, s)
     template = expected[y0:y1, x0:x1].astype(np.float32)
     cover = _overlap_map(padded, template, s) / total   # (2s+1, 2s+1), index = shift + s
     dys, dxs = np.mgrid[-s: s + 1, -s: s + 1]
@@ -830,9 +823,8 @@ def check_shape(
                            if regions.previous_silhouette is not None else expected_a & ~band_a)
             shifted_band = band_shift(observed, bed_evidence, before_band, band_a, reach, reach // 2,
                                       int(np.ceil(layer_shift_mm * regions.px_per_mm)), tol,
-                                      undecided=dont_care_a if reflection_a is None else dont_care_a | reflection_a)
-            if shifted_band is not None:
-                shifted_band.bed_to_image = regions.bed_to_image
+                                      undecided=dont_care_a if reflection_a is None else dont_care_a | reflection_a,
+                                      bed_to_image=regions.bed_to_image)
 
     # A part knocked off its place: most of the outline is empty, and the whole part stands elsewhere
     # (perhaps inside the bed-marks zone, where it would otherwise pass for a brim). Searched up to

@@ -13,10 +13,8 @@ BAND = Box(110, 80, 210, 110)         # printed since
 
 def view(observed, *, bed=None, before=BASE.mask(), band=BAND.mask(), reach=24, min_dx=5, J=None):
     """band_shift of one synthetic camera; by default everything not observed is confidently bed."""
-    result = band_shift(observed, ~observed if bed is None else bed, before, band, reach, reach // 2, min_dx, 2.0)
-    if result is not None and J is not None:
-        result.bed_to_image = np.asarray(J, float)
-    return result
+    return band_shift(observed, ~observed if bed is None else bed, before, band, reach, reach // 2, min_dx, 2.0,
+                      bed_to_image=J)
 
 
 def test_a_band_printed_sideways_is_found_with_its_shift():

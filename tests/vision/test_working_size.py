@@ -60,3 +60,10 @@ def test_a_1280_wide_camera_is_checked_at_640_and_still_catches_a_runout(tmp_pat
     assert run([4.0, 8.0, 12.0]) == ["ok", "ok", "ok"]
     assert run([4.0, 8.0, 8.0])[-1] == "fail"          # stopped at 8 mm: the top third is missing
     assert to_working_size(None, plan.cameras["a"]) is None
+
+
+def test_projecting_a_strided_view_of_points_matches_projecting_a_copy():
+    # cv2.projectPoints refuses non-contiguous input; callers slice point arrays (every other corner)
+    cam = Camera.look_at("a", (100, -20, 60), (100, 100, 4), width=320, height=240, hfov_deg=40)
+    points = np.array([[x, y, z] for x in (90.0, 110.0) for y in (90.0, 110.0) for z in (0.0, 8.0)])
+    assert np.allclose(cam.project(points[1::2]), cam.project(points[1::2].copy()))
