@@ -8,6 +8,7 @@
         --counts normal=8,runout=4,detach=4,spaghetti=4,layer_shift=4
     ... --gcode-only | --jpeg 40 | --background-exposure 0.7 | --calibration-error 2 | --format png
     ... --parts tests/data/gcode/cura413_ender3_sun_gear.gcode,cube     # other parts / other slicers' G-code
+    ... --holdout 6 --parts arch,bracket,cup,pin,tiers,hexnut,thin_wall,cone   # shapes never tuned on
 
 Every recording is written by ``octoprint_printwatch.simulator`` (parts, failure
 kinds, looks incl. the hard cases, several rigs, calibration error on every
@@ -108,8 +109,9 @@ def plan_specs(counts: dict[str, int], holdout: int = 0,
 
     ``holdout`` > 0 gives a different set (other seeds, so other random looks, calibration errors and
     noise, and other part/look/rig combinations) to check that a change does not only fit the default set.
-    ``parts`` replaces the library parts: names or paths of G-code (the part is rebuilt from its
-    toolpaths, e.g. another slicer's output) or mesh files.
+    ``parts`` replaces the benchmark's parts: library names (any of the simulator's, e.g. the hold-out
+    shapes ``cup``, ``pin``, ``tiers``, ``hexnut``, ``thin_wall``, ``cone``), paths of G-code (the part is
+    rebuilt from its toolpaths, e.g. another slicer's output) or mesh files.
     """
     parts = tuple(parts) if parts else PARTS
     specs = []
@@ -276,7 +278,8 @@ def evaluate(folder: Path, settings: DetectionSettings) -> dict:
                 mixed_errors[name] = seed_error(ours.observed_mask, view.silhouette)
                 mixed_fail |= mixed_errors[name] > SEED_THRESHOLD_PCT
         n_cams = max(1, len(result.shape))
-        shape_only, _ = decide(result.shape, {}, settings, result.unreadable)
+        shape_only, _ = decide(result.shape, {}, settings, result.unreadable, layer_shift=result.layer_shift,
+                               top_closing=result.top_closing)
         size_errors = {k: v.get("error_pct") for k, v in result.size.items()}
         rows.append({
             "layer": check.layer, "z": check.z, "started": t["failure_started"], "should_flag": t["should_flag"],
@@ -436,11 +439,13 @@ def main(argv=None) -> int:
             args.parts = ",".join(stored["parts"])
     parts = None
     if args.parts:
+        from octoprint_printwatch.simulator.parts import LIBRARY_PARTS
+
         parts = [p.strip() for p in args.parts.split(",") if p.strip()]
         for part in parts:
-            if part not in PARTS and not args.cached_only and not Path(part).is_file():
-                parser.error(f"--parts: {part}: neither a library part ({', '.join(PARTS)}) nor a file")
-        parts = [p if p in PARTS or args.cached_only else str(Path(p).resolve()) for p in parts]
+            if part not in LIBRARY_PARTS and not args.cached_only and not Path(part).is_file():
+                parser.error(f"--parts: {part}: neither a library part ({', '.join(LIBRARY_PARTS)}) nor a file")
+        parts = [p if p in LIBRARY_PARTS or args.cached_only else str(Path(p).resolve()) for p in parts]
     if not args.cached_only:
         set_options(data, conditions, args.holdout or 0, counts if (args.counts or args.quick) else None, parts)
     holdout = args.holdout or 0

@@ -15,7 +15,11 @@ restored through the plugin's API). Reports, as a Markdown table:
 * the park moves' duration at 100 % feed rate, from the injected blocks
   (distance / feed rate per move), so the figure can be read for a real printer;
 * latency of ``GET /api/job`` and ``GET /plugin/printwatch/status``, polled
-  every 50 ms, separately for samples taken while a check was running.
+  every 50 ms, separately for samples taken while a check was running;
+* the upload of a large synthetic G-code file (``--upload-mb``): how long the
+  upload request takes with the injection inside OctoPrint's preprocessor hook,
+  and the latency of ``GET /api/version`` polled meanwhile (the injection must
+  not stall the server).
 """
 from __future__ import annotations
 
@@ -113,6 +117,37 @@ def timed_print(server, gcode: Path, speed: int, *, upload: bool = True) -> tupl
     return elapsed, poller
 
 
+def upload_latency(server, size_mb: float, folder: Path) -> tuple[float, list[float]]:
+    """(seconds the upload request took, /api/version latencies sampled during it)."""
+    import requests
+
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from bench_gcode import synthetic_gcode
+
+    big = folder / f"synthetic_{size_mb:g}mb.gcode"
+    synthetic_gcode(big, size_mb)
+    samples, stop = [], threading.Event()
+
+    def poll():
+        session = requests.Session()
+        session.headers.update(server.headers())
+        while not stop.is_set():
+            t0 = time.perf_counter()
+            session.get(server.url + "/api/version", timeout=120)
+            samples.append((t0, time.perf_counter() - t0))
+            stop.wait(0.05)
+
+    thread = threading.Thread(target=poll, daemon=True)
+    thread.start()
+    time.sleep(1.0)
+    started = time.perf_counter()
+    server.upload(big)
+    took = time.perf_counter() - started
+    stop.set()
+    thread.join()
+    return took, [latency for t, latency in samples if started <= t <= started + took]
+
+
 def stats(values):
     values = sorted(values)
     if not values:
@@ -125,6 +160,7 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--speed", type=int, default=1000, help="M220 feed rate percent (1000 = 10x)")
     parser.add_argument("--every", type=int, default=20, help="check every N layers")
+    parser.add_argument("--upload-mb", type=float, default=30.0, help="size of the large upload (0: skip)")
     args = parser.parse_args(argv)
     gcode = ROOT / "octoprint_printwatch" / "data" / "parts" / "cube.gcode"
 
@@ -138,6 +174,7 @@ def main(argv=None) -> int:
             off = server.post(f"{API}/files/local/cube.gcode", {"checks_enabled": False})
             off.raise_for_status()
             without_checks, _ = timed_print(server, gcode, args.speed, upload=False)
+            upload = upload_latency(server, args.upload_mb, Path(tmp)) if args.upload_mb > 0 else None
 
     n = len(checks)
     holds = [c["hold_seconds"] for c in checks]
@@ -163,6 +200,12 @@ def main(argv=None) -> int:
         during = [s for s, e, c in poller.samples if e == endpoint and c]
         other = [s for s, e, c in poller.samples if e == endpoint and not c]
         print(f"| {label} | {stats(during)} (n={len(during)}) | {stats(other)} (n={len(other)}) |")
+    if upload is not None:
+        took, latencies = upload
+        print()
+        print(f"Upload of a {args.upload_mb:g} MB G-code file (checks injected inside OctoPrint's preprocessor hook): "
+              f"the request took {took:.1f} s ({took / args.upload_mb:.2f} s/MB); meanwhile `GET /api/version` "
+              f"answered in {stats(latencies)} ms (median / p95 / max, n={len(latencies)}): the server does not stall.")
     return 0
 
 

@@ -87,6 +87,7 @@ class JobPlan:
     prepare_seconds: float = 0.0
     notes: list[str] = field(default_factory=list)
     cache_dir: Path | None = None
+    _closing: dict = field(default_factory=dict, repr=False)   # {z: top_closing(z)}
 
     def view(self, camera: str, z: float, previous_z: float | None = None):
         """The expected view of ``camera`` at ``z``; rendered now (and kept) when not planned."""
@@ -109,6 +110,18 @@ class JobPlan:
             found = PlannedView(found)
             self.views[key] = found
         return found
+
+    def top_closing(self, z: float, skin_mm: float = 1.0) -> bool:
+        """Whether a top surface closes within ``skin_mm`` above ``z``: the part's cross-section there is
+        under half of the one just below ``z`` (the end of the part, or a step). Its solid top skin then
+        looks unlike the sparse infill seen before (smooth, often glossy: from some views like the bed)."""
+        key = round(float(z), 3)
+        if key not in self._closing:
+            below = self.part.cross_section_area(max(float(z) - 0.1, 0.05))
+            top = float(self.part.height())
+            above = self.part.cross_section_area(float(z) + skin_mm) if float(z) + skin_mm < top else 0.0
+            self._closing[key] = below > 0 and above < 0.5 * below
+        return self._closing[key]
 
     def regions(self, camera: str, z: float, settings: DetectionSettings,
                 previous_z: float | None = None) -> ExpectedRegions:
@@ -323,6 +336,7 @@ class CheckResult:
     shape_seconds: float = 0.0       # the part of ``seconds`` spent in the shape checks (wall time)
     shape_cpu_seconds: float = 0.0   # CPU time of the shape checks (all threads; less sensitive to load)
     layer_shift: LayerShift | None = None   # the newest layers' best bed shift the cameras agree on
+    top_closing: bool = False   # a top surface closes in the newest layers (JobPlan.top_closing)
 
     def to_json(self) -> dict:
         """The check entry of the ``printwatch evaluate`` contract (plus a ``shape`` detail block)."""
@@ -349,7 +363,7 @@ def layer_shift_of(shape: Mapping[str, ShapeResult]) -> LayerShift | None:
 
 def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings: DetectionSettings,
            unreadable: Mapping[str, str] | Sequence[str] = (), *,
-           layer_shift: LayerShift | None = None) -> tuple[str, list[str]]:
+           layer_shift: LayerShift | None = None, top_closing: bool = False) -> tuple[str, list[str]]:
     """The combined decision rule -> (verdict, reasons).
 
     * A camera counts only when it gave a frame and its background still matches the bed
@@ -392,8 +406,11 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     growth = [r.growth_pct for r in measured.values()]
     # ... and where the part stopped, its newest layers are missing in a view that sees no rise; without
     # that, a flat rise is a top skin closing in a colour the camera cannot tell from the bed
+    # (where a top surface closes in the newest layers, ``top_closing``, its smooth skin may read missing
+    # as a whole, like the bed: then only the newest band itself gone counts)
     band_gone = any(r.growth_pct < settings.min_growth_pct
-                    and ((r.band_missing_pct or 0.0) >= 25.0 or r.missing_pct >= r.threshold / 2.0)
+                    and ((r.band_missing_pct or 0.0) >= 25.0
+                         or (not top_closing and r.missing_pct >= r.threshold / 2.0))
                     for r in measured.values())
     stalled = bool(growth) and float(np.median(growth)) < settings.min_growth_pct and band_gone
     size_fail, size_usable = [], 0
@@ -521,12 +538,14 @@ class CheckRunner:
         shape_cpu_seconds = time.process_time() - cpu_started
         size = self._size_check(z, frames, shape)
         layer_shift = layer_shift_of(shape)
-        verdict, reasons = decide(shape, size, settings, unreadable, layer_shift=layer_shift)
+        top_closing = self.plan.top_closing(z)
+        verdict, reasons = decide(shape, size, settings, unreadable, layer_shift=layer_shift,
+                                  top_closing=top_closing)
         self.previous_z = z
         return CheckResult(layer=int(layer), z=float(z), verdict=verdict, shape_error_pct=errors, shape=shape,
                            size=size, reasons=reasons, seconds=time.perf_counter() - started,
                            unreadable=list(unreadable), shape_seconds=shape_seconds, layer_shift=layer_shift,
-                           shape_cpu_seconds=shape_cpu_seconds)
+                           shape_cpu_seconds=shape_cpu_seconds, top_closing=top_closing)
 
     def _second_look(self, name: str, result: ShapeResult, shape_args: dict) -> ShapeResult | None:
         """The camera's check again at the best of the shifts earlier checks could not tell apart, when it

@@ -15,6 +15,7 @@ import shutil
 import subprocess
 import sys
 from pathlib import Path
+from typing import Sequence
 
 import numpy as np
 
@@ -90,12 +91,32 @@ def build(name: str):
         gusset = m3d.Manifold.extrude(_cross_section([(5.0, 0.0), (20.0, 0.0), (5.0, 18.0)]), 4.0)
         gusset = gusset.rotate([90.0, 0.0, 0.0]).translate([0, 14.0, 5.0])
         return (base + wall + gusset).translate([-18.0, -12.0, 0.0])
+    # Shapes added for a hold-out of parts the detector was never tuned on (docs/detection-hostile.md):
+    if name == "cup":  # open top: the inside wall shows from above, the rim is thin
+        outer = m3d.Manifold.extrude(_cross_section(_circle(15.0)), 26.0)
+        inner = m3d.Manifold.extrude(_cross_section(_circle(12.6)), 30.0).translate([0, 0, 2.0])
+        return outer - inner
+    if name == "pin":  # 7 mm thin and 35 mm tall: a few pixels wide in a distant camera
+        return m3d.Manifold.extrude(_cross_section(_circle(3.5, 32)), 35.0)
+    if name == "tiers":  # three stacked cylinders: each step is a top face that becomes a ledge
+        return (m3d.Manifold.extrude(_cross_section(_circle(20.0)), 8.0)
+                + m3d.Manifold.extrude(_cross_section(_circle(13.0)), 16.0)
+                + m3d.Manifold.extrude(_cross_section(_circle(7.0)), 26.0))
+    if name == "hexnut":  # short, with a bore: a flat top skin closes at the last layers
+        hexagon = [(15.0 * math.cos(a), 15.0 * math.sin(a)) for a in np.arange(6) * math.pi / 3]
+        bore = m3d.Manifold.extrude(_cross_section(_circle(7.0)), 20.0).translate([0, 0, -2.0])
+        return m3d.Manifold.extrude(_cross_section(hexagon), 12.0) - bore
+    if name == "thin_wall":  # a 1.6 mm wall on a foot: edge-on it is a sliver
+        wall = m3d.Manifold.cube([45.0, 1.6, 22.0], center=True).translate([0, 0, 11.0])
+        return wall + m3d.Manifold.cube([45.0, 10.0, 2.0], center=True).translate([0, 0, 1.0])
+    if name == "cone":  # a shrinking top face
+        return m3d.Manifold.extrude(_cross_section(_circle(18.0)), 30.0, scale_top=(0.15, 0.15))
     raise GeometryError(f"unknown library part {name!r}; choose from {', '.join(LIBRARY_PARTS)}")
 
 
 #: Names accepted by :func:`library_part`.
 LIBRARY_PARTS = ("cube", "cylinder", "prism", "rect_prism", "gear", "sun_gear", "twisted_vase", "pyramid", "tower",
-                 "arch", "bracket")
+                 "arch", "bracket", "cup", "pin", "tiers", "hexnut", "thin_wall", "cone")
 
 
 def library_part(name: str) -> Path:
@@ -129,12 +150,14 @@ SLICER_OPTIONS = ["--layer-height", "0.2", "--first-layer-height", "0.2", "--fil
                   "--center", f"{GCODE_CENTER[0]:g},{GCODE_CENTER[1]:g}"]
 
 
-def rebuild_library(out_dir: Path = PARTS_DIR, *, slice_gcode: bool = True) -> list[Path]:
-    """Write every library part's STL (and G-code when PrusaSlicer is installed) into ``out_dir``."""
+def rebuild_library(out_dir: Path = PARTS_DIR, *, slice_gcode: bool = True,
+                    names: Sequence[str] = LIBRARY_PARTS) -> list[Path]:
+    """Write the STL (and G-code when PrusaSlicer is installed) of library parts ``names`` (default all)
+    into ``out_dir``."""
     out_dir.mkdir(parents=True, exist_ok=True)
     written = []
     slicer = shutil.which("prusa-slicer")
-    for name in LIBRARY_PARTS:
+    for name in names:
         stl = out_dir / f"{name}.stl"
         mesh = manifold_to_trimesh(build(name))
         # Slicers centre the bounding box; so does the library, so model and G-code agree.
@@ -154,5 +177,5 @@ def rebuild_library(out_dir: Path = PARTS_DIR, *, slice_gcode: bool = True) -> l
 
 
 if __name__ == "__main__":  # pragma: no cover
-    for path in rebuild_library():
+    for path in rebuild_library(names=sys.argv[1:] or LIBRARY_PARTS):
         print(f"{path.stat().st_size:>9}  {path}", file=sys.stdout)

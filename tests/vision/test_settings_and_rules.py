@@ -116,3 +116,36 @@ def test_outlines_that_sank_are_camouflage_not_a_stall():
     assert decide(sinking, {}, s)[0] == "ok"
     stalled = {"a": figures("a", growth=-8.0, missing=5.4, band_missing=30.0), "b": figures("b", growth=4.0)}
     assert decide(stalled, {}, s)[0] == "fail"
+
+
+def test_a_top_skin_closing_that_reads_missing_as_a_whole_is_not_a_stall():
+    # the last layers of a part close its top with a smooth skin that can look like the bed: no view
+    # sees the outline rise and much of the top reads missing, but not the newest band itself
+    s = DetectionSettings()
+    closing = {"a": figures("a", growth=0.0, missing=6.0, band_missing=15.0), "b": figures("b", growth=0.0),
+               "c": figures("c", growth=10.0, missing=1.7, band_missing=4.0)}
+    assert decide(closing, {}, s, top_closing=True)[0] == "ok"
+    # the same readings in the middle of the part are a stall (runout)
+    verdict, reasons = decide(closing, {}, s, top_closing=False)
+    assert verdict == "fail" and any("not grown" in r for r in reasons)
+    # and at a closing top the newest band itself gone still is one
+    gone = dict(closing, a=figures("a", growth=0.0, missing=6.0, band_missing=40.0))
+    assert decide(gone, {}, s, top_closing=True)[0] == "fail"
+
+
+def test_job_plan_knows_where_a_top_surface_closes():
+    from octoprint_printwatch.core.geometry import part_from_mesh
+    from octoprint_printwatch.core.pipeline import JobPlan
+    from octoprint_printwatch.simulator.parts import library_part
+
+    def plan(name):
+        part = part_from_mesh(library_part(name))
+        return JobPlan(part=part, cameras={}, pairs=[], check_heights=[], views={}, footprint=np.zeros((0, 2)),
+                       max_shift_px={}, tolerance_px={})
+
+    cube = plan("cube")   # 20 mm
+    assert not cube.top_closing(10.0) and not cube.top_closing(18.5)
+    assert cube.top_closing(19.4) and cube.top_closing(20.0)
+    tiers = plan("tiers")   # steps at 8 and 16 mm (r 20 -> 13 -> 7), top at 26
+    assert tiers.top_closing(7.6) and not tiers.top_closing(12.0) and tiers.top_closing(15.4)
+    assert not tiers.top_closing(20.0) and tiers.top_closing(26.0)
