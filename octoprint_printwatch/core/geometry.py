@@ -171,7 +171,9 @@ class PartModel:
         key = round(z, 4)
         if key not in self._below_cache:
             self._below_cache[key] = self._trim(z)
-            if len(self._below_cache) > 64:  # bounded: heights of one job are few
+            # bounded and small: renderers take every camera at one height before the next, and a trimmed
+            # mesh carries its edge tables (tens of MB for a detailed part)
+            if len(self._below_cache) > 4:
                 self._below_cache.pop(next(iter(self._below_cache)))
         return self._below_cache[key]
 

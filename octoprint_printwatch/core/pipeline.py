@@ -165,7 +165,7 @@ def prepare_job(
     """Build the job's plan: the expected part (from the model when given, else the G-code), the
     expected views of every camera at every check height, and each camera's alignment bounds."""
     from .geometry import part_from_gcode, part_from_mesh
-    from .render import render_expected_views
+    from .render import iter_expected_views
 
     settings = settings or DetectionSettings()
     started = time.perf_counter()
@@ -182,11 +182,9 @@ def prepare_job(
     notes.extend(getattr(part, "notes", []) or [])
     cameras = {name: working_camera(cam, settings.working_width) for name, cam in cameras.items()}
     heights = sorted({(int(layer), float(z)) for layer, z in (check_heights or [])}, key=lambda lz: lz[1])
-    views = {}
-    if heights:
-        for camera in cameras.values():  # one camera at a time: full views are large, packed ones small
-            rendered = render_expected_views(part, [camera], [z for _, z in heights], cache_dir=cache_dir)
-            views.update({(cam, _zkey(z)): PlannedView(view) for (cam, z), view in rendered.items()})
+    # one full view at a time: each is large (two depth maps), what the plan keeps of it small
+    views = {(cam, _zkey(z)): PlannedView(view) for cam, _, z, view in
+             iter_expected_views(part, list(cameras.values()), [z for _, z in heights], cache_dir=cache_dir)}
     footprint = part_footprint(part.mesh)
     max_shift, tolerance, scale = {}, {}, {}
     for name, cam in cameras.items():

@@ -526,9 +526,20 @@ def render_expected_views(part: PartModel, cameras: Sequence[Camera], heights: I
     For sequential prints (objects printed one after another) use
     :func:`render_expected_views_by_layer`.
     """
+    return {(camera, z): view for camera, _, z, view in iter_expected_views(part, cameras, heights, cache_dir)}
+
+
+def iter_expected_views(part: PartModel, cameras: Sequence[Camera], heights: Iterable[float],
+                        cache_dir: str | Path | None = None):
+    """:func:`render_expected_views` one view at a time: yields ``(camera name, None, z, ExpectedView)``,
+    heights ascending, every camera at one height before the next height.
+
+    A full view holds two float32 depth maps (about 3.6 MB at 640x480): a caller that keeps only
+    what it needs of each view (``core.pipeline.PlannedView``) never holds more than one. The part
+    trimmed at a height is rendered for every camera while it is at hand.
+    """
     heights = sorted({round(float(z), 4) for z in heights})
-    checks = [(None, z) for z in heights]
-    return {(camera, z): view for (camera, _, z), view in _render_checks(part, cameras, checks, cache_dir).items()}
+    yield from _render_checks(part, cameras, [(None, z) for z in heights], cache_dir)
 
 
 def render_expected_views_by_layer(part: PartModel, cameras: Sequence[Camera], checks: Iterable[tuple[int, float]],
@@ -541,20 +552,20 @@ def render_expected_views_by_layer(part: PartModel, cameras: Sequence[Camera], c
     previous check's layer.
     """
     checks = sorted({(int(layer), round(float(z), 4)) for layer, z in checks})
-    return {(camera, layer): view for (camera, layer, _), view in _render_checks(part, cameras, checks, cache_dir).items()}
+    return {(camera, layer): view for camera, layer, _, view in _render_checks(part, cameras, checks, cache_dir)}
 
 
-def _render_checks(part: PartModel, cameras: Sequence[Camera], checks: list, cache_dir) -> dict:
-    """{(camera name, layer or None, z): view} for sorted ``checks`` [(layer or None, z)], with caching."""
+def _render_checks(part: PartModel, cameras: Sequence[Camera], checks: list, cache_dir):
+    """Yields (camera name, layer or None, z, view) for sorted ``checks`` [(layer or None, z)], with caching:
+    every camera at one check before the next check (the part trimmed at that check is then at hand)."""
     part_hash = mesh_key(part.mesh)
     directory = Path(cache_dir) if cache_dir is not None else None
     if directory is not None:
         directory.mkdir(parents=True, exist_ok=True)
-    views = {}
-    for camera in cameras:
-        cam_hash = camera_key(camera)
-        previous_layer, previous = None, 0.0
-        for layer, z in checks:
+    cam_hashes = [camera_key(camera) for camera in cameras]
+    previous_layer, previous = None, 0.0
+    for layer, z in checks:
+        for camera, cam_hash in zip(cameras, cam_hashes):
             key = (part_hash, cam_hash, z, previous, layer, previous_layer)
             view = _MEMORY_CACHE.get(key)
             name = f"{part_hash}_{cam_hash}_{z:.4f}_{previous:.4f}"
@@ -570,6 +581,5 @@ def _render_checks(part: PartModel, cameras: Sequence[Camera], checks: list, cac
             if len(_MEMORY_CACHE) >= _MEMORY_CACHE_LIMIT:
                 _MEMORY_CACHE.pop(next(iter(_MEMORY_CACHE)))
             _MEMORY_CACHE[key] = view
-            views[(camera.name, layer, z)] = view
-            previous_layer, previous = layer, z
-    return views
+            yield camera.name, layer, z, view
+        previous_layer, previous = layer, z
