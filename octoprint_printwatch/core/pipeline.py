@@ -115,6 +115,8 @@ class JobPlan:
         """Whether a top surface closes within ``skin_mm`` above ``z``: the part's cross-section there is
         under half of the one just below ``z`` (the end of the part, or a step). Its solid top skin then
         looks unlike the sparse infill seen before (smooth, often glossy: from some views like the bed)."""
+        if self.part is None:   # a plan built from views alone (tests): nothing known about the part's shape
+            return False
         key = round(float(z), 3)
         if key not in self._closing:
             below = self.part.cross_section_area(max(float(z) - 0.1, 0.05))
