@@ -216,6 +216,22 @@ def working_camera(camera: Camera, width: int) -> Camera:
     return Camera(camera.name, width, height, K, camera.dist.copy(), camera.rvec.copy(), camera.tvec.copy())
 
 
+def frame_size_problem(image: np.ndarray | None, camera: Camera, what: str = "frames") -> str | None:
+    """Why ``image`` (h, w, 3) cannot be checked against ``camera``'s calibration, or None.
+
+    Another resolution of the same picture is fine (it is resized); another aspect ratio is not: the
+    webcam now delivers another crop of its sensor (a resolution changed after calibration is the
+    usual cause), and no resize maps it onto the calibrated view.
+    """
+    if image is None or camera.width <= 0 or camera.height <= 0:
+        return None
+    h, w = image.shape[:2]
+    if h <= 0 or abs((w / h) / (camera.width / camera.height) - 1.0) <= 0.02:
+        return None
+    return (f"{what} are {w}x{h}, another aspect ratio than the calibrated {camera.width}x{camera.height} "
+            f"(the webcam's resolution changed?): set it back or calibrate this camera again")
+
+
 def to_working_size(image: np.ndarray | None, camera: Camera) -> np.ndarray | None:
     """(h, w, 3) frame resized to ``camera``'s (working) size; None stays None."""
     if image is None or image.shape[:2] == (camera.height, camera.width):
@@ -466,8 +482,11 @@ class CheckRunner:
                  backgrounds: Mapping[str, np.ndarray | None]):
         self.plan = plan
         self.settings = settings or DetectionSettings()
-        # every frame is checked at the plan's (working) camera size
-        self.backgrounds = {name: to_working_size(image, plan.cameras[name]) if name in plan.cameras else image
+        # every frame is checked at the plan's (working) camera size; one of another aspect ratio not at all
+        self.background_problems = {name: problem for name, image in backgrounds.items() if name in plan.cameras
+                                    and (problem := frame_size_problem(image, plan.cameras[name], "background frames"))}
+        self.backgrounds = {name: None if name in self.background_problems
+                            else to_working_size(image, plan.cameras[name]) if name in plan.cameras else image
                             for name, image in backgrounds.items()}
         self.previous_masks: dict[str, np.ndarray] = {}
         self.anchors: dict[str, tuple[int, int]] = {}
@@ -485,7 +504,10 @@ class CheckRunner:
         started = time.perf_counter()
         cpu_started = time.process_time()
         settings = self.settings
-        frames = {name: to_working_size(image, self.plan.cameras[name]) if name in self.plan.cameras else image
+        problems = {name: problem for name, image in frames.items() if name in self.plan.cameras
+                    and (problem := frame_size_problem(image, self.plan.cameras[name]))}
+        frames = {name: None if name in problems
+                  else to_working_size(image, self.plan.cameras[name]) if name in self.plan.cameras else image
                   for name, image in frames.items()}
         shape: dict[str, ShapeResult] = {}
         errors: dict[str, float | None] = {}
@@ -494,7 +516,8 @@ class CheckRunner:
             frame = frames.get(name)
             background = self.backgrounds.get(name)
             if frame is None or background is None:
-                unreadable[name] = "no frame (camera unavailable)" if frame is None else "no background frame"
+                unreadable[name] = (problems.get(name) or self.background_problems.get(name)
+                                    or ("no frame (camera unavailable)" if frame is None else "no background frame"))
                 errors[name] = None
                 continue
             regions = self.plan.regions(name, z, settings, self.previous_z)

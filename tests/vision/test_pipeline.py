@@ -127,3 +127,36 @@ def test_search_region_stays_below_the_parked_hotend(cams):
     part_top = cam.project(np.array([[100.0, 100.0, 8.0]]))[0]
     assert region[int(part_top[1]), int(part_top[0])]
     assert not region[int(hotend_at_30mm[1]), int(hotend_at_30mm[0])]
+
+
+
+def test_frames_of_another_aspect_ratio_are_reported_never_checked(cams):
+    # camera "a" now delivers 16:9 frames (its resolution was changed after calibration): it is reported
+    # with the reason and gives no verdict, so a runout is judged on "b" alone; "b" at twice its
+    # calibrated resolution (same picture, same aspect ratio) is resized and checked as usual
+    settings = DetectionSettings()
+    backgrounds = {n: bed(i) for i, n in enumerate(cams)}
+    runner = CheckRunner(make_plan(cams, settings), settings, backgrounds)
+    results = []
+    for k, ((layer, z), printed) in enumerate(zip(HEIGHTS, [2.0, 4.0, 4.0, 4.0])):
+        a = frame(cams["a"], backgrounds["a"], printed, 10 * k)
+        b = frame(cams["b"], backgrounds["b"], printed, 10 * k + 1)
+        results.append(runner.run_check(layer, z, {"a": cv2.resize(a, (W, W * 9 // 16)),
+                                                   "b": cv2.resize(b, (2 * W, 2 * H))}))
+    assert [r.verdict for r in results] == ["ok", "ok", "fail", "fail"]
+    for r in results:
+        assert r.shape_error_pct["a"] is None and "a" in r.unreadable
+        assert any(reason.startswith("a: frames are 320x180, another aspect ratio than the calibrated 320x240")
+                   for reason in r.reasons)
+        assert r.shape_error_pct["b"] is not None
+
+
+def test_a_background_of_another_aspect_ratio_is_reported(cams):
+    settings = DetectionSettings()
+    backgrounds = {n: bed(i) for i, n in enumerate(cams)}
+    runner = CheckRunner(make_plan(cams, settings), settings,
+                         dict(backgrounds, b=cv2.resize(backgrounds["b"], (W, W * 9 // 16))))
+    layer, z = HEIGHTS[0]
+    result = runner.run_check(layer, z, {n: frame(c, backgrounds[n], z, i) for i, (n, c) in enumerate(cams.items())})
+    assert result.verdict == "ok" and "b" in result.unreadable
+    assert any(reason.startswith("b: background frames are 320x180") for reason in result.reasons)
