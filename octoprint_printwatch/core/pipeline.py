@@ -512,6 +512,8 @@ class CheckRunner:
         shape: dict[str, ShapeResult] = {}
         errors: dict[str, float | None] = {}
         unreadable: dict[str, str] = {}
+        shape_inputs: dict[str, dict] = {}
+        before_observed: dict[str, np.ndarray | None] = {}
         for name in self.plan.cameras:
             frame = frames.get(name)
             background = self.backgrounds.get(name)
@@ -539,7 +541,9 @@ class CheckRunner:
                 keep_pictures=self.keep_pictures,
             )
             result = check_shape(**shape_args, candidates=self.shift_candidates.get(name), track_candidates=True)
-            shape[name] = self._second_look(name, result, shape_args) or result
+            before_observed[name] = self.last_observed.get(name)
+            shape_inputs[name] = shape_args
+            shape[name] = self._second_look(name, result, shape_args, before_observed[name]) or result
             errors[name] = shape[name].error_pct if result.usable else None
             if result.usable:
                 self.last_observed[name] = result.observed_mask
@@ -557,6 +561,14 @@ class CheckRunner:
                     self.anchors[name] = result.shift_px
                     if _silhouette_rows(regions.silhouette) >= 2 * regions.max_shift_px:
                         self.frozen.add(name)
+        # missing material alone gets its second look only from a camera no other camera corroborates
+        failing = [name for name, r in shape.items() if r.usable and not r.passed]
+        if len(failing) == 1:
+            name = failing[0]
+            second = self._second_look(name, shape[name], shape_inputs[name], before_observed[name], missing=True)
+            if second is not None:
+                shape[name] = second
+                errors[name] = second.error_pct
         shape_seconds = time.perf_counter() - started
         shape_cpu_seconds = time.process_time() - cpu_started
         size = self._size_check(z, frames, shape)
@@ -570,26 +582,34 @@ class CheckRunner:
                            unreadable=list(unreadable), shape_seconds=shape_seconds, layer_shift=layer_shift,
                            shape_cpu_seconds=shape_cpu_seconds, top_closing=top_closing)
 
-    def _second_look(self, name: str, result: ShapeResult, shape_args: dict) -> ShapeResult | None:
+    def _second_look(self, name: str, result: ShapeResult, shape_args: dict, before: np.ndarray | None,
+                     missing: bool = False) -> ShapeResult | None:
         """The camera's check again at the best of the shifts earlier checks could not tell apart, when it
         failed in a way a misplaced outline explains and nothing moved; the new result if it passes
         clearly, else None.
 
-        A flat first layer with a brim fits the outline anywhere along the brim, and the anchor the first
-        checks leave may sit several pixels off; a later, taller check then shows the part's side beyond
-        the outline as "extra". Only that failure gets a second look: extra material alone (nothing missing,
-        not decisive, no newest-band failure), the material seen at the previous check still seen (a part
-        that slid or was knocked off is not in place), the shift among those no passing check could tell
-        apart, and the check passing there with half the threshold to spare. It changes nothing kept for
-        later checks (anchor, candidates, masks): it can turn a failing camera into a passing one, never
-        the other way round.
+        A flat first layer with a brim fits the outline anywhere along the brim (a top view of a part on its
+        shadow and brim, anywhere over tens of pixels), and the anchor the first checks leave may sit
+        several pixels off; a later check then shows the part's side beyond the outline as "extra", or the
+        bed beside it as "missing". Only those failures get a second look: extra material alone
+        (``missing`` False), or missing material alone (``missing`` True: the caller asks only when no other
+        camera fails, since a detached or stopped part is missed by several views) in a view that does
+        not see the part stall (a runout stops the rise); not decisive, no newest-band failure, the
+        material seen at the previous check (``before``) still seen (a part that slid or was knocked off
+        is not in place), the shift among those no passing check could tell apart, and the check passing
+        there with half the threshold to spare. It changes nothing kept for later checks (anchor,
+        candidates, masks): it can turn a failing camera into a passing one, never the other way round.
         """
         threshold = self.settings.threshold_for(name)
-        if (not result.usable or result.passed or result.decisive or result.best_candidate is None
+        if missing:
+            shape_fits = (result.extra_pct < threshold / 3.0 <= result.missing_pct
+                          and (result.growth_pct is None or result.growth_pct >= 50.0))
+        else:
+            shape_fits = result.missing_pct < threshold / 3.0
+        if (not shape_fits or not result.usable or result.passed or result.decisive or result.best_candidate is None
                 or result.best_candidate == result.shift_px or name not in self.shift_candidates
-                or result.missing_pct >= threshold / 3.0
                 or (result.band_error_pct is not None and result.band_error_pct > self.settings.band_threshold_pct)
-                or not _still_in_place(result.observed_mask, self.last_observed.get(name))):
+                or not _still_in_place(result.observed_mask, before)):
             return None
         second = check_shape(**dict(shape_args, anchor=result.best_candidate, max_drift=0))
         if second.usable and second.passed and second.error_pct <= threshold / 2.0:
