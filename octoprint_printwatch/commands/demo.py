@@ -16,9 +16,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                     "tab until the print is paused. --headless runs it to the end without a browser, prints a "
                     "summary and exits 1 if the failure was missed (or a normal print was paused).",
     )
+    from ..simulator.parts import LIBRARY_PARTS
+
     p.add_argument("--part", default="twisted_vase", metavar="NAME",
-                   help="library part: arch, bracket, cube, cylinder, gear, prism, pyramid, rect_prism, "
-                        "sun_gear, tower, twisted_vase (default: twisted_vase)")
+                   help=f"library part: {', '.join(sorted(LIBRARY_PARTS))} (default: twisted_vase)")
     p.add_argument("--failure", default="runout", metavar="KIND",
                    help="runout, detach, spaghetti, layer_shift, under_extrusion, or none for a normal print "
                         "(default: runout)")
