@@ -25,6 +25,7 @@ from .errors import PrintWatchError
 from .settings import DetectionSettings
 from .layer_shift import LayerShift, confirms_layer_shift, describe_layer_shift, estimate_layer_shift
 from .shape_check import ExpectedRegions, ShapeResult, check_shape
+from .tangle import loose_material
 
 VERDICTS = ("ok", "fail", "unknown")
 
@@ -400,6 +401,10 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     * or when the cameras together confirm that the newest layers sit sideways on the older ones
       (``layer_shift``: :func:`layer_shift_of`, computed here when not given; see
       :func:`core.layer_shift.confirms_layer_shift`);
+    * or when loose material (spaghetti) appeared around the part since the previous check: material new
+      since then, where the model has none, attached to the part and over 2 mm beyond its outline
+      (``ShapeResult.new_outside``), at least 6 mm^2 in two usable views, or 30 mm^2 when only one camera
+      is usable (:func:`core.tangle.loose_material`);
     * unknown when no camera and no pair gave usable evidence; ok otherwise.
     """
     if layer_shift is None:
@@ -468,6 +473,11 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
                             f"runout, clog or a stopped print?")
     if layer_shift is not None and confirms_layer_shift(layer_shift, settings.layer_shift_mm):
         fail_reasons.append(describe_layer_shift(layer_shift))
+        shape_fail = True
+    tangle = loose_material({cam: None if r.new_outside is None else r.new_outside.area_mm2
+                             for cam, r in usable.items()})
+    if tangle is not None:
+        fail_reasons.append(tangle)
         shape_fail = True
     if shape_fail or size_fail or stalled:
         return "fail", fail_reasons + size_fail + reasons

@@ -38,6 +38,7 @@ import cv2
 import numpy as np
 
 from .layer_shift import BandShift, band_shift
+from .tangle import NewMaterial, new_material
 from .masks import around, bounding_box, dilate, disk, erode, shift_mask  # noqa: F401  (re-exported)
 
 #: Shadows keep at least this fraction of the bed's brightness; darker than that is material anywhere.
@@ -138,6 +139,8 @@ class ShapeResult:
     decisive: bool = False
     changed_bed_fraction: float = 0.0
     band_shift: "BandShift | None" = None   # the best layer-shift hypothesis tested (None: not tested)
+    #: material new since the previous check outside the expected part (core/tangle.py; None: not tested)
+    new_outside: "NewMaterial | None" = None
     observed_mask: np.ndarray | None = field(default=None, repr=False)   # (h, w) bool, full frame
     #: (k, 2) int (dx, dy): the shifts this check could not tell apart, within the ``candidates`` given
     #: (see align_candidates), and the best of them; None when not asked for
@@ -172,6 +175,7 @@ class ShapeResult:
             "growth_pct": None if self.growth_pct is None else round(self.growth_pct, 1),
             "shift_px": list(self.shift_px),
             "band_shift": None if self.band_shift is None else self.band_shift.figures(),
+            "new_outside_mm2": None if self.new_outside is None else round(self.new_outside.area_mm2, 1),
             "threshold": self.threshold,
             "passed": self.passed,
             "usable": self.usable,
@@ -835,6 +839,13 @@ def check_shape(
         min_move = max(layer_shift_mm * regions.px_per_mm, 2.0 * tol + 1.0)
         moved_px = displaced_part(observed, expected_a, reach, min_move)
 
+    # Spaghetti (core/tangle.py): material seen now and not at the previous check, where the model has no
+    # part, attached to it; pipeline.decide weighs it over the cameras
+    new_outside = None
+    if last_observed is not None and last_observed.shape == (h, w):
+        new_outside = new_material(observed, last_observed[crop], expected_a, search_a, tol, regions.px_per_mm,
+                                   ignore=reflection_a, marks=dont_care_a, linked=~evidence.bed)
+
     reasons: list[str] = []
     decisive = False
     usable = changed <= max_changed_bed_fraction
@@ -877,6 +888,7 @@ def check_shape(
         threshold=float(threshold), band_threshold=float(band_threshold), passed=passed, usable=usable,
         reasons=reasons, changed_bed_fraction=changed, observed_mask=observed_full, palette=palette_now,
         decisive=decisive, shift_candidates=shift_candidates, best_candidate=best_candidate,
+        new_outside=new_outside,
     )
     if keep_pictures:
         full = np.zeros((h, w), bool)
