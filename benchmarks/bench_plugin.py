@@ -38,6 +38,8 @@ sys.path.insert(0, str(ROOT / "tests" / "plugin"))
 
 from stack import printwatch_stack, start_print, wait_print_end  # noqa: E402
 
+from bench_gcode import synthetic_gcode  # noqa: E402  (this folder, first on sys.path when run as a script)
+
 API = "/plugin/printwatch"
 
 
@@ -120,9 +122,6 @@ def timed_print(server, gcode: Path, speed: int, *, upload: bool = True) -> tupl
 def upload_latency(server, size_mb: float, folder: Path) -> tuple[float, list[float]]:
     """(seconds the upload request took, /api/version latencies sampled during it)."""
     import requests
-
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    from bench_gcode import synthetic_gcode
 
     big = folder / f"synthetic_{size_mb:g}mb.gcode"
     synthetic_gcode(big, size_mb)

@@ -65,3 +65,41 @@ def around(mask: np.ndarray, box: tuple[int, int, int, int], reach_x: int, reach
     out[sy0 - (y0 - reach_y): sy1 - (y0 - reach_y), sx0 - (x0 - reach_x): sx1 - (x0 - reach_x)] = \
         mask[sy0:sy1, sx0:sx1]
     return out
+
+
+def outline_zone(expected: np.ndarray, tolerance: float, top_tolerance: float = 0.0) -> np.ndarray:
+    """(h, w) bool: ``expected`` grown by ``tolerance`` px, and upwards (towards row 0) by ``top_tolerance``
+    px more (a part's top may stand a little higher in the image than its outline: the vertical alignment
+    is the least certain, and a camera may fire a layer late). Material there is not held against the print."""
+    grown = dilate(expected, tolerance)
+    if top_tolerance >= 1.0:
+        k = int(round(top_tolerance))
+        grown |= cv2.dilate(grown.astype(np.uint8), np.ones((k + 1, 1), np.uint8), anchor=(0, 0)).astype(bool)
+    return grown
+
+
+def reaching_in_from_above(objects: np.ndarray, search: np.ndarray, expected: np.ndarray) -> np.ndarray:
+    """(h, w) bool: the pixels of ``objects`` in blobs that reach in from above the ``search`` box and hang
+    there, which are not the print's (the parked hotend, the gantry, a hand).
+
+    A blob counts when 15 % of its pixels lie beyond the box and 5 % above its top edge (a part sliding out
+    sideways is the print's), and it does not reach down into the ``expected`` part's lowest quarter (a part
+    that tipped over and stands taller than the box does).
+    """
+    count, labels = cv2.connectedComponents(objects.astype(np.uint8), connectivity=8)
+    if count <= 1:
+        return np.zeros(objects.shape, bool)
+    area = np.bincount(labels.ravel(), minlength=count)
+    beyond = np.bincount(labels.ravel(), weights=(~search).ravel().astype(np.float64), minlength=count)
+    ceiling = np.where(search.any(axis=0), np.argmax(search, axis=0), search.shape[0])
+    above = np.arange(search.shape[0])[:, None] < ceiling[None, :]
+    from_above = np.bincount(labels.ravel(), weights=above.ravel().astype(np.float64), minlength=count)
+    foreign = (beyond >= 0.15 * np.maximum(area, 1)) & (from_above >= 0.05 * np.maximum(area, 1))
+    rows = np.flatnonzero(expected.any(axis=1))
+    if rows.size:
+        foot_zone = rows[-1] - 0.25 * (rows[-1] - rows[0])
+        lowest = np.zeros(count, np.int64)
+        np.maximum.at(lowest, labels[objects], np.nonzero(objects)[0])
+        foreign &= lowest < foot_zone
+    foreign[0] = False
+    return foreign[labels]

@@ -24,7 +24,7 @@ from .camera import Camera
 from .errors import PrintWatchError
 from .settings import DetectionSettings
 from .layer_shift import LayerShift, confirms_layer_shift, describe_layer_shift, estimate_layer_shift
-from .shape_check import ExpectedRegions, ShapeResult, check_shape
+from .shape_check import ExpectedRegions, ShapeResult, check_shape, not_decisive_where_calibrated
 from .tangle import loose_material
 
 VERDICTS = ("ok", "fail", "unknown")
@@ -88,7 +88,6 @@ class JobPlan:
     prepare_seconds: float = 0.0
     notes: list[str] = field(default_factory=list)
     cache_dir: Path | None = None
-    _closing: dict = field(default_factory=dict, repr=False)   # {z: top_closing(z)}
 
     def view(self, camera: str, z: float, previous_z: float | None = None):
         """The expected view of ``camera`` at ``z``; rendered now (and kept) when not planned."""
@@ -118,13 +117,10 @@ class JobPlan:
         looks unlike the sparse infill seen before (smooth, often glossy: from some views like the bed)."""
         if self.part is None:   # a plan built from views alone (tests): nothing known about the part's shape
             return False
-        key = round(float(z), 3)
-        if key not in self._closing:
-            below = self.part.cross_section_area(max(float(z) - 0.1, 0.05))
-            top = float(self.part.height())
-            above = self.part.cross_section_area(float(z) + skin_mm) if float(z) + skin_mm < top else 0.0
-            self._closing[key] = below > 0 and above < 0.5 * below
-        return self._closing[key]
+        # two cross-sections, about 0.1 ms: not worth keeping
+        below = self.part.cross_section_area(max(float(z) - 0.1, 0.05))
+        above = self.part.cross_section_area(float(z) + skin_mm) if float(z) + skin_mm < self.part.height() else 0.0
+        return below > 0 and above < 0.5 * below
 
     def regions(self, camera: str, z: float, settings: DetectionSettings,
                 previous_z: float | None = None) -> ExpectedRegions:
@@ -551,6 +547,7 @@ class CheckRunner:
                 keep_pictures=self.keep_pictures,
             )
             result = check_shape(**shape_args, candidates=self.shift_candidates.get(name), track_candidates=True)
+            result = not_decisive_where_calibrated(result, shape_args)
             before_observed[name] = self.last_observed.get(name)
             shape_inputs[name] = shape_args
             shape[name] = self._second_look(name, result, shape_args, before_observed[name]) or result

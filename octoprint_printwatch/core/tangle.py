@@ -30,7 +30,7 @@ from typing import Mapping
 import cv2
 import numpy as np
 
-from .masks import dilate, disk
+from .masks import dilate, disk, outline_zone, reaching_in_from_above
 
 #: New material closer than this to the expected silhouette (mm at the part) is not counted: the residual
 #: calibration error (1 %, 0.5 deg, 1 mm) leaves a part's edge up to about a millimetre outside its outline.
@@ -93,11 +93,8 @@ def new_material(
     tol = float(tolerance)
     none = NewMaterial(0.0, 0, 0, np.zeros(observed.shape, bool))
     distance = cv2.distanceTransform((~expected).astype(np.uint8), cv2.DIST_L2, 3)
-    grown = distance <= tol
-    k = int(round(tol))
-    if k >= 1:
-        # upwards the tolerance is doubled: the part's top may stand a layer higher than the model says
-        grown |= cv2.dilate(grown.astype(np.uint8), np.ones((k + 1, 1), np.uint8), anchor=(0, 0)).astype(bool)
+    # upwards the tolerance is doubled: the part's top may stand a layer higher than the model says
+    grown = outline_zone(expected, tol, tol)
     outside = observed & ~grown
     new = outside & search & ~dilate(previous, 2)
     if ignore is not None:
@@ -108,8 +105,8 @@ def new_material(
     # objects reaching in from above the search box are not the print's (the hotend, the gantry), grouped
     # with everything not confidently bed as in compare_masks (the nozzle and its dark body are one object);
     # nor are strands leaving the box upwards on their own (filament pulled towards the parked nozzle)
-    new &= ~_from_above(outside if linked is None else outside | (linked & ~grown), search, expected)
-    new &= ~_from_above(outside, search, expected)
+    new &= ~reaching_in_from_above(outside if linked is None else outside | (linked & ~grown), search, expected)
+    new &= ~reaching_in_from_above(outside, search, expected)
     count, labels, stats, _ = cv2.connectedComponentsWithStats(new.astype(np.uint8), connectivity=8)
     keep = np.ones(count, bool)
     keep[0] = False
@@ -151,23 +148,3 @@ def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = 
                 f"({views}): spaghetti, or the part knocked loose?")
     return None
 
-
-def _from_above(objects: np.ndarray, search: np.ndarray, expected: np.ndarray) -> np.ndarray:
-    """(h, w) bool: the pixels of ``objects`` ((h, w) bool) in blobs that reach in from above the search box
-    (15 % of their pixels beyond it, 5 % above its top edge) and do not reach down to the expected part's
-    lowest quarter (what does stands on the bed: a part knocked over), as compare_masks decides."""
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(objects.astype(np.uint8), connectivity=8)
-    if count <= 1:
-        return np.zeros(objects.shape, bool)
-    area = stats[:, cv2.CC_STAT_AREA]
-    ys, xs = np.nonzero(objects)
-    ids = labels[ys, xs]
-    beyond = np.bincount(ids, weights=~search[ys, xs], minlength=count)
-    ceiling = np.where(search.any(axis=0), np.argmax(search, axis=0), search.shape[0])
-    from_above = np.bincount(ids, weights=ys < ceiling[xs], minlength=count)
-    foreign = (beyond >= 0.15 * np.maximum(area, 1)) & (from_above >= 0.05 * np.maximum(area, 1))
-    rows = np.flatnonzero(expected.any(axis=1))
-    lowest = stats[:, cv2.CC_STAT_TOP] + stats[:, cv2.CC_STAT_HEIGHT] - 1
-    foreign &= lowest < rows[-1] - 0.25 * (rows[-1] - rows[0])
-    foreign[0] = False
-    return foreign[labels]
