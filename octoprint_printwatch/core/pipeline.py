@@ -387,7 +387,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       part found elsewhere: the part moved; extra material four times the threshold),
     * while the part visibly grows (median growth >= 50 %), a camera failing on missing material
       alone does not count (a face the colour of what lies behind it looks missing); nor does missing
-      material alone from no more than half of the usable cameras unless the part stalled;
+      material alone from no more than half of the usable cameras unless the part stalled, nor from a
+      camera's first look at the part (``ShapeResult.first_look``: the growth test needs a second one);
     * or when the part stopped growing (corroborated by missing material in at least one view:
       25 % of the newest band, or half the threshold overall, in a view that saw no rise): the median over
       cameras of the observed rise of the part's upper outline since the previous check (readings below
@@ -449,6 +450,12 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     decisive = [r for r in failing if r.decisive]
     missing_only = [r for r in failing
                     if not r.decisive and 0 < r.missing_pct and r.extra_pct * 2.0 <= r.missing_pct]
+    # A camera's first look cannot tell a face the colour of what lies behind it from a part that printed
+    # less than the model says: one frame shows both as missing material. The next check can (the growth
+    # test), so there missing material alone waits for it.
+    waiting = {r.camera for r in missing_only if r.first_look}
+    failing = [r for r in failing if r.camera not in waiting]
+    missing_only = [r for r in missing_only if r.camera not in waiting]
     if missing_only and not stalled and 2 * len(missing_only) <= len(usable):
         # "Missing" alone, from no more than half of the cameras, while the part has not stopped growing:
         # faces the colour of what lies behind them (dark on dark, grey on grey) look exactly like this,

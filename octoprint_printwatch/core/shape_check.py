@@ -144,6 +144,8 @@ class ShapeResult:
     #: material new since the previous check outside the expected part (core/tangle.py; None: not tested)
     new_outside: "NewMaterial | None" = None
     moved_px: tuple[int, int] | None = None   # (dx, dy) where the whole part was found displaced, or None
+    #: this camera's first usable look at the part (no material mask of an earlier check to compare with)
+    first_look: bool = False
     observed_mask: np.ndarray | None = field(default=None, repr=False)   # (h, w) bool, full frame
     #: (k, 2) int (dx, dy): the shifts this check could not tell apart, within the ``candidates`` given
     #: (see align_candidates), and the best of them; None when not asked for
@@ -870,7 +872,7 @@ def check_shape(
         threshold=float(threshold), band_threshold=float(band_threshold), passed=passed, usable=usable,
         reasons=reasons, changed_bed_fraction=changed, observed_mask=observed_full, palette=palette_now,
         decisive=decisive, shift_candidates=shift_candidates, best_candidate=best_candidate,
-        new_outside=new_outside, moved_px=moved_px,
+        new_outside=new_outside, moved_px=moved_px, first_look=last_observed is None,
     )
     if keep_pictures:
         full = np.zeros((h, w), bool)

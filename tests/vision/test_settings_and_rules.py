@@ -149,3 +149,22 @@ def test_job_plan_knows_where_a_top_surface_closes():
     tiers = plan("tiers")   # steps at 8 and 16 mm (r 20 -> 13 -> 7), top at 26
     assert tiers.top_closing(7.6) and not tiers.top_closing(12.0) and tiers.top_closing(15.4)
     assert not tiers.top_closing(20.0) and tiers.top_closing(26.0)
+
+
+def test_missing_material_alone_waits_for_a_cameras_second_look():
+    """At a camera's first look, a top face the colour of the bed and a part that printed less look the
+    same (material missing, nothing extra): the print is not paused until the next check can tell."""
+    s = DetectionSettings()
+
+    def missing(name, first_look, extra=0.0, decisive=False):
+        return ShapeResult(name, 25.0 + extra, 30.0, 25.0, extra, None, None, 0, 100, None, (0, 0), 7.0, 50.0,
+                           passed=False, reasons=[f"{name}: material missing"], decisive=decisive,
+                           first_look=first_look)
+
+    first = {"a": missing("a", True), "b": missing("b", True)}
+    assert decide(first, {}, s)[0] == "ok"
+    later = {"a": missing("a", False), "b": missing("b", False)}
+    assert decide(later, {}, s)[0] == "fail"
+    # a part displaced at the first look (missing AND extra material) does not wait
+    moved = {"a": missing("a", True, extra=20.0, decisive=True), "b": shape("b")}
+    assert decide(moved, {}, s)[0] == "fail"
