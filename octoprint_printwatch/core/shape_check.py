@@ -40,6 +40,7 @@ import numpy as np
 
 from .layer_shift import BandShift, band_shift
 from .tangle import NewMaterial, new_material
+from .shadows import shade_of_clipped_bed, shadow_left
 from .masks import (around, bounding_box, dilate, disk, erode, outline_zone,  # noqa: F401  (re-exported)
                     reaching_in_from_above, shift_mask)
 
@@ -226,6 +227,7 @@ def material_evidence(
     material_factor: float = 5.0,
     bed_factor: float = 2.5,
     previous: np.ndarray | None = None,
+    part: np.ndarray | None = None,
 ) -> Evidence:
     """Background removal on one crop.
 
@@ -238,6 +240,9 @@ def material_evidence(
     material_factor, bed_factor : thresholds in noise units for "material" and "confidently bed".
     previous : (h, w) bool, the previous check's material mask: inside it (and the prior) weaker evidence
         suffices, as the seed reused its ``prev`` mask; a part that left it shows bed and is not kept.
+    part : (h, w) bool or None, the expected silhouette (grown by the outline tolerance): a lit face of a
+        part in the bed's colour looks like the bed brightened, so there only the bed's own grain tells a
+        shadow that left (core/shadows.py); None: the whole prior.
     """
     bg = background.astype(np.float32)
     fr = frame.astype(np.float32)
@@ -281,8 +286,20 @@ def material_evidence(
     # darkens the bed smoothly
     edges = cv2.dilate((z["texture"] > material_factor).astype(np.uint8), _KERNEL5).astype(bool)
     deep_dark &= prior | edges
-    strong = np.maximum(z["chroma"], z["bright"])
-    weak = np.maximum(z["dark"], z["texture"])
+    # a shadow on a bed with a saturated channel seems to change its colour (the clipped channel's true
+    # value is unknown): ratio constancy on the other channels tells it (core/shadows.py)
+    chroma_strong = np.where(shade_of_clipped_bed(fr, bg, background >= 250, material_factor * noise["chroma"],
+                                                  where=z["chroma"] > material_factor), 0.0, z["chroma"])
+    # a shadow of the parked head or gantry that lay here in the background frame and has moved away
+    # brightens the bed without changing its colour or pattern (core/shadows.py): a weak cue there, like
+    # darkening
+    bright_strong = np.where(shadow_left(luma_f, luma_b, sample, noise["bright"], material_factor,
+                                         where=(z["bright"] > material_factor) & (chroma_strong <= material_factor),
+                                         min_ratio=SHADOW_MIN_RATIO, prior=prior if part is None else part,
+                                         surroundings=prior),
+                             0.0, z["bright"])
+    strong = np.maximum(chroma_strong, bright_strong)
+    weak = np.maximum(np.maximum(z["dark"], z["texture"]), np.maximum(z["bright"], z["chroma"]))
     strong_material = (strong > material_factor) | deep_dark
     material = strong_material | ((weak > material_factor) & prior)
     if previous is not None:
@@ -734,7 +751,8 @@ def check_shape(
         previous = previous_mask[crop]
 
     evidence = material_evidence(background[crop], frame[crop], prior, bed_sample,
-                                 material_factor=material_factor, bed_factor=bed_factor, previous=previous)
+                                 material_factor=material_factor, bed_factor=bed_factor, previous=previous,
+                                 part=distance <= tol)
     observed = clean_mask(evidence.material, fill_like=distance <= shift_bound)
     observed_strong = observed & evidence.strong
     changed = evidence.changed_bed_fraction

@@ -1,0 +1,135 @@
+"""Shadows that moved between the background frame and a check are not material.
+
+The parked head, its carriage and the gantry rise with every check, so the shadows they cast on the bed
+move: where the background frame had such a shadow the bed is now lit, and reads as "brighter than the
+background". Physics tells the two apart without numbers tuned to one scene:
+
+* light that returns brightens the bed by one factor in every channel (white light keeps the bed's
+  chromaticity; the colour cue already checks that);
+* it cannot make the bed brighter than the lit bed itself;
+* the bed keeps its own texture: where the background shows a pattern above the noise, the frame's
+  local pattern correlates with it (normalised cross-correlation, blind to the brightness factor).
+Material (a strand, a moved part) replaces the bed's colour or its texture, or is brighter than the lit
+bed; only a part whose colour, brightness and (on a smooth bed) lack of texture match the lit bed
+passes for a shadow that left, and such a part is camouflaged anyway.
+"""
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from .masks import bounding_box
+
+#: Side (px) of the window the local pattern is compared in.
+TEXTURE_WINDOW = 11
+#: The background's local grain (standard deviation) must reach this many noise units (the brightening
+#: cue's noise on certain bed, which a 1-px shake does not inflate) before its correlation is asked for.
+TEXTURE_MIN_Z = 2.0
+#: Where the bed shows a pattern, the frame must correlate with it at least this well to be the same bed.
+MIN_CORRELATION = 0.5
+
+
+def shadow_left(luma_f: np.ndarray, luma_b: np.ndarray, sample: np.ndarray, bright_noise: float,
+                factor: float, where: np.ndarray, min_ratio: float, prior: np.ndarray,
+                surroundings: np.ndarray) -> np.ndarray:
+    """(h, w) bool: the pixels of ``where`` ((h, w) bool: brighter than the background) where the
+    frame (``luma_f``, (h, w) float32) may be brighter than the background (``luma_b``, (h, w) float32,
+    already at the frame's exposure) only because a shadow in the background frame has moved away: not
+    brighter than the lit bed (the upper quartile of either image's certain bed, ``sample`` flat
+    indices, plus ``factor`` x ``bright_noise``), brighter by at most 1 / ``min_ratio`` (the least light a
+    shadow leaves), not a thin line, and, where the background has a grain
+    above the noise, correlating with it (on the residual of a 5x5 median, which keeps edges). Within
+    ``prior`` ((h, w) bool, where the part is expected: a lit face of a part in the bed's colour is brighter
+    than the bed too) only the correlation with the bed's grain tells the bed, never its absence. A head's
+    or gantry's shadow is large: a region that passes is kept only where a quarter of it lies outside
+    ``surroundings`` ((h, w) bool, the part's surroundings), so a reflection or a skirt next to the part
+    never passes for one. The work is done on the box around ``where`` only (a few ms where a shadow
+    moved, nothing elsewhere)."""
+    out = np.zeros(luma_f.shape, bool)
+    if sample.size < 50 or not where.any():
+        return out
+    # the lit bed: its upper quartile (most of the certain bed is lit in one of the two images; a higher
+    # percentile would reach the glass's glare or a bright backdrop, which a white part can match)
+    lit = max(float(np.percentile(luma_b.ravel()[sample], 75)), float(np.percentile(luma_f.ravel()[sample], 75)))
+    y0, y1, x0, x1 = bounding_box(where, pad=TEXTURE_WINDOW + 3)
+    box = (slice(y0, y1), slice(x0, x1))
+    out[box] = where[box] & _shading_only(luma_f[box], luma_b[box], lit + factor * bright_noise, bright_noise,
+                                          factor, min_ratio, prior[box])
+    # (regions are grouped across gaps of a few pixels: grain and noise break a shadow's area up)
+    grouped = cv2.dilate(out.astype(np.uint8), np.ones((7, 7), np.uint8))
+    count, labels = cv2.connectedComponents(grouped, connectivity=8)
+    if count > 1:
+        area = np.bincount(labels.ravel(), weights=out.ravel().astype(np.float64), minlength=count)
+        near = np.bincount(labels.ravel(), weights=(out & surroundings).ravel().astype(np.float64), minlength=count)
+        large = near <= 0.75 * area
+        large[0] = False
+        out &= large[labels]
+    return out
+
+
+def _shading_only(luma_f: np.ndarray, luma_b: np.ndarray, lit: float, bright_noise: float,
+                  factor: float, min_ratio: float, prior: np.ndarray) -> np.ndarray:
+    """(h, w) bool, see :func:`shadow_left` (``lit``: the brightest the lit bed can look)."""
+    # ... and by at most the factor a shadow can take away (it keeps SHADOW_MIN_RATIO of the light): a
+    # lit part in front of a dark backdrop is brighter than that
+    candidate = (luma_f <= lit) & (luma_f <= luma_b / min_ratio + factor * bright_noise)
+    if not candidate.any():
+        return candidate
+    # the bed's grain, without edges: a 5x5 median keeps a shadow's edge (in the background, not in the
+    # frame, once the shadow left) and removes the grain, so the residual holds the grain alone
+    smooth_b = cv2.medianBlur(luma_b, 5)
+    grain_f = luma_f - cv2.medianBlur(luma_f, 5)
+    grain_b = luma_b - smooth_b
+    win = (TEXTURE_WINDOW, TEXTURE_WINDOW)
+    mean_f, mean_b = cv2.blur(grain_f, win), cv2.blur(grain_b, win)
+    var_f = np.maximum(cv2.blur(grain_f * grain_f, win) - mean_f * mean_f, 0.0)
+    var_b = np.maximum(cv2.blur(grain_b * grain_b, win) - mean_b * mean_b, 0.0)
+    textured = var_b > (TEXTURE_MIN_Z * bright_noise) ** 2
+    # ... but not along an edge of the background itself (the border of the shadow that left): the median
+    # only approximates a sharp or stepped edge, and what it leaves there is no grain
+    gx = cv2.Sobel(smooth_b, cv2.CV_32F, 1, 0, ksize=3)
+    gy = cv2.Sobel(smooth_b, cv2.CV_32F, 0, 1, ksize=3)
+    edge_b = (np.abs(gx) + np.abs(gy)) * 0.25 > factor * bright_noise + 2.0 * np.sqrt(var_b)
+    textured &= ~cv2.dilate(edge_b.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
+    correlation = np.full(luma_f.shape, -1.0, np.float32)
+    if (candidate & textured).any():
+        # the best of the nine 1-px shifts: a shaken camera moves the grain, the light does not change it
+        h, w = luma_f.shape
+        padded = [cv2.copyMakeBorder(a, 1, 1, 1, 1, cv2.BORDER_REPLICATE) for a in (grain_b, mean_b, var_b)]
+        for dy in (0, 1, 2):
+            for dx in (0, 1, 2):
+                g_b, m_b, v_b = (a[dy:dy + h, dx:dx + w] for a in padded)
+                cov = cv2.blur(grain_f * g_b, win) - mean_f * m_b
+                np.maximum(correlation, cov / np.sqrt(np.maximum(var_f * v_b, 1e-6)), out=correlation)
+    # a strand (thin, darker or brighter than both its sides) is no shadow's edge, which is a step the
+    # median keeps; nor is it the bed's grain, brightened with the bed
+    light_back = np.maximum(cv2.blur(luma_f, win) / np.maximum(cv2.blur(luma_b, win), 1.0), 1.0)
+    thin = np.abs(grain_f) > factor * bright_noise + 3.0 * light_back * np.sqrt(var_b)
+    thin = cv2.dilate(thin.astype(np.uint8), np.ones((3, 3), np.uint8)).astype(bool)
+    same_grain = textured & (correlation >= MIN_CORRELATION)
+    return candidate & ~thin & np.where(prior, same_grain, same_grain | ~textured)
+
+
+def shade_of_clipped_bed(frame: np.ndarray, background: np.ndarray, clipped: np.ndarray, tolerance: float,
+                         where: np.ndarray) -> np.ndarray:
+    """(h, w) bool: the pixels of ``where`` whose colour change is a shadow on a bed with a saturated
+    channel. A shadow scales every channel by one factor, but where a channel of the background frame is
+    clipped (``clipped`` (h, w, 3) bool) its true value is unknown (at least what was stored), so the
+    chromaticity seems to change. Here the factor is fitted on the unclipped channels, which must follow it
+    within ``tolerance`` grey levels, and a clipped channel must be at least the factor times its stored
+    value. ``frame``, ``background`` (h, w, 3) float32, the background at the frame's exposure."""
+    out = np.zeros(where.shape, bool)
+    # (per pixel of ``where`` only: reducing the whole (h, w, 3) mask costs more than the rest)
+    index = np.flatnonzero(where)
+    c = clipped.reshape(-1, 3)[index]
+    partly = c.any(axis=1) & ~c.all(axis=1)
+    if not partly.any():
+        return out
+    index, c = index[partly], c[partly]
+    f, b = frame.reshape(-1, 3)[index], background.reshape(-1, 3)[index]
+    free = ~c
+    k = (f * b * free).sum(axis=1) / np.maximum((b * b * free).sum(axis=1), 1.0)
+    predicted = k[:, None] * b
+    fits = np.where(free, np.abs(f - predicted) <= tolerance, f >= predicted - tolerance).all(axis=1)
+    out.ravel()[index] = fits & (k < 1.0)
+    return out
