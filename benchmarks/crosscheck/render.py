@@ -335,20 +335,13 @@ def render_view(camera: Camera, meshes: list[Mesh], strands: list[Strand], light
     face_id = np.full((Hc, Wc), -1, np.int32)
 
     normals, albedo, layer_amp, spec, flat = [], [], [], [], []
-    first = 0
-    for mesh in meshes:
-        tris = np.asarray(mesh.vertices, float)[np.asarray(mesh.faces)]
-        if len(tris) == 0:
-            continue
-        n = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
-        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
-        rasterise(tris @ R.T + t, cv.K, Wc, Hc, np.full(len(tris), not mesh.two_sided), inv_depth, face_id, first)
+    for mesh, n in _rasterise_meshes(meshes, camera, cv, inv_depth, face_id):
         normals.append(n)
-        albedo.append(np.tile(np.asarray(mesh.colour, float), (len(tris), 1)))
-        layer_amp.append(np.full(len(tris), mesh.layer_lines))
-        spec.append(np.full(len(tris), mesh.specular))
-        flat.append(np.full(len(tris), mesh.flat))
-        first += len(tris)
+        albedo.append(np.tile(np.asarray(mesh.colour, float), (len(n), 1)))
+        layer_amp.append(np.full(len(n), mesh.layer_lines))
+        spec.append(np.full(len(n), mesh.specular))
+        flat.append(np.full(len(n), mesh.flat))
+    first = sum(len(n) for n in normals)
     # strands go into their own buffer, depth-tested against the solids, and are blended with what lies
     # behind them by their true width in pixels (a 0.1-mm hair covers a fraction of a pixel, while the
     # rasteriser draws at least one)
@@ -497,12 +490,12 @@ def _static_ground(cv: Canvas, camera: Camera, bed: BedLook, decals) -> dict:
     return st
 
 
-def render_meshes_only(cv: Canvas, camera: Camera, meshes: list[Mesh], light: Light) -> tuple[np.ndarray, np.ndarray]:
-    """Shaded meshes on the canvas without bed or shadows: ((Hc, Wc, 3) colour, (Hc, Wc) bool coverage)."""
-    R, t, eye = camera.R, np.asarray(camera.tvec, float), camera.centre
-    inv_depth = np.zeros((cv.height, cv.width), np.float32)
-    face_id = np.full((cv.height, cv.width), -1, np.int32)
-    normals, albedo = [], []
+def _rasterise_meshes(meshes: list[Mesh], camera: Camera, cv: Canvas, inv_depth: np.ndarray, face_id: np.ndarray,
+                      cull_all: bool = False):
+    """Rasterise ``meshes`` into ``inv_depth`` / ``face_id`` ((Hc, Wc) canvas buffers, face ids numbered
+    across the meshes in order) and yield (mesh, (n, 3) unit face normals) for each non-empty mesh. Back
+    faces are culled for one-sided meshes, or for all with ``cull_all``."""
+    R, t = camera.R, np.asarray(camera.tvec, float)
     first = 0
     for mesh in meshes:
         tris = np.asarray(mesh.vertices, float)[np.asarray(mesh.faces)]
@@ -510,10 +503,21 @@ def render_meshes_only(cv: Canvas, camera: Camera, meshes: list[Mesh], light: Li
             continue
         n = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
         n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
-        rasterise(tris @ R.T + t, cv.K, cv.width, cv.height, np.ones(len(tris), bool), inv_depth, face_id, first)
-        normals.append(n)
-        albedo.append(np.tile(np.asarray(mesh.colour, float), (len(tris), 1)))
+        cull = np.full(len(tris), cull_all or not mesh.two_sided)
+        rasterise(tris @ R.T + t, cv.K, cv.width, cv.height, cull, inv_depth, face_id, first)
         first += len(tris)
+        yield mesh, n
+
+
+def render_meshes_only(cv: Canvas, camera: Camera, meshes: list[Mesh], light: Light) -> tuple[np.ndarray, np.ndarray]:
+    """Shaded meshes on the canvas without bed or shadows: ((Hc, Wc, 3) colour, (Hc, Wc) bool coverage)."""
+    inv_depth = np.zeros((cv.height, cv.width), np.float32)
+    face_id = np.full((cv.height, cv.width), -1, np.int32)
+    normals, albedo = [], []
+    for mesh, n in _rasterise_meshes(meshes, camera, cv, inv_depth, face_id, cull_all=True):
+        normals.append(n)
+        albedo.append(np.tile(np.asarray(mesh.colour, float), (len(n), 1)))
+    first = sum(len(n) for n in normals)
     out = np.zeros((cv.height, cv.width, 3), np.float32)
     pix = face_id >= 0
     if first:
