@@ -43,8 +43,8 @@ def shadow_left(luma_f: np.ndarray, luma_b: np.ndarray, sample: np.ndarray, brig
     than the bed too) only the correlation with the bed's grain tells the bed, never its absence. A head's
     or gantry's shadow is large: a region that passes is kept only where a quarter of it lies outside
     ``surroundings`` ((h, w) bool, the part's surroundings), so a reflection or a skirt next to the part
-    never passes for one. The work is done on the box around ``where`` only (a few ms where a shadow
-    moved, nothing elsewhere)."""
+    never passes for one. The work is done on the box around ``where`` only (which on many scenes holds
+    the part's own lit faces: about 7 ms per camera-check on the benchmark, see docs/detection-shadows.md)."""
     out = np.zeros(luma_f.shape, bool)
     if sample.size < 50 or not where.any():
         return out
