@@ -183,7 +183,11 @@ def test_tab_shows_chart_points_overlays_and_history(watched_print):
     screenshot(page, "chart", "#printwatch_print")
 
 
-def test_rerun_with_a_lower_threshold_moves_the_first_failure(watched_print):
+def test_rerun_with_a_lower_threshold_marks_more_failures(watched_print):
+    """Re-judging with a threshold below every passing check's error marks more camera-checks failed on the
+    chart and never moves the first failure later. (Whether the print would have paused earlier depends on
+    the decision rule: missing material alone at a camera's first look, or from no more than half of the
+    cameras, does not pause a print, docs/detection.md.)"""
     page, record = watched_print["page"], watched_print["print"]
     open_printwatch_tab(page)
     ok_values = [
@@ -201,7 +205,7 @@ def test_rerun_with_a_lower_threshold_moves_the_first_failure(watched_print):
     summary = page.inner_text(".printwatch-rerun-summary")
     assert "first failure is at layer" in summary
     rerun_layer = int(summary.split("first failure is at layer")[1].split()[0])
-    assert rerun_layer < record["first_failure_layer"]
+    assert rerun_layer <= record["first_failure_layer"]
     page.wait_for_function(
         "([t, n]) => { const e = document.getElementById('printwatch_chart_shape');"
         " return Math.abs(parseFloat(e.dataset.thresholds) - t) < 1e-6 && +e.dataset.failed > n; }",
