@@ -526,7 +526,6 @@ class CheckRunner:
         errors: dict[str, float | None] = {}
         unreadable: dict[str, str] = {}
         shape_inputs: dict[str, dict] = {}
-        before_observed: dict[str, np.ndarray | None] = {}
         for name in self.plan.cameras:
             frame = frames.get(name)
             background = self.backgrounds.get(name)
@@ -555,9 +554,8 @@ class CheckRunner:
             )
             result = check_shape(**shape_args, candidates=self.shift_candidates.get(name), track_candidates=True)
             result = not_decisive_where_calibrated(result, shape_args)
-            before_observed[name] = self.last_observed.get(name)
             shape_inputs[name] = shape_args
-            shape[name] = self._second_look(name, result, shape_args, before_observed[name]) or result
+            shape[name] = self._second_look(name, result, shape_args) or result
             errors[name] = shape[name].error_pct if result.usable else None
             if result.usable:
                 self.last_observed[name] = result.observed_mask
@@ -579,7 +577,7 @@ class CheckRunner:
         failing = [name for name, r in shape.items() if r.usable and not r.passed]
         if len(failing) == 1:
             name = failing[0]
-            second = self._second_look(name, shape[name], shape_inputs[name], before_observed[name], missing=True)
+            second = self._second_look(name, shape[name], shape_inputs[name], missing=True)
             if second is not None:
                 shape[name] = second
                 errors[name] = second.error_pct
@@ -596,7 +594,7 @@ class CheckRunner:
                            unreadable=list(unreadable), shape_seconds=shape_seconds, layer_shift=layer_shift,
                            shape_cpu_seconds=shape_cpu_seconds, top_closing=top_closing)
 
-    def _second_look(self, name: str, result: ShapeResult, shape_args: dict, before: np.ndarray | None,
+    def _second_look(self, name: str, result: ShapeResult, shape_args: dict,
                      missing: bool = False) -> ShapeResult | None:
         """The camera's check again at the best of the shifts earlier checks could not tell apart, when it
         failed in a way a misplaced outline explains and nothing moved; the new result if it passes
@@ -609,7 +607,7 @@ class CheckRunner:
         (``missing`` False), or missing material alone (``missing`` True: the caller asks only when no other
         camera fails, since a detached or stopped part is missed by several views) in a view that does
         not see the part stall (a runout stops the rise); not decisive, no newest-band failure, the
-        material seen at the previous check (``before``) still seen (a part that slid or was knocked off
+        material seen at the previous check (``shape_args["last_observed"]``) still seen (a part that slid or was knocked off
         is not in place), the shift among those no passing check could tell apart, and the check passing
         there with half the threshold to spare. It changes nothing kept for later checks (anchor,
         candidates, masks): it can turn a failing camera into a passing one, never the other way round.
@@ -623,7 +621,7 @@ class CheckRunner:
         if (not shape_fits or not result.usable or result.passed or result.decisive or result.best_candidate is None
                 or result.best_candidate == result.shift_px or name not in self.shift_candidates
                 or (result.band_error_pct is not None and result.band_error_pct > self.settings.band_threshold_pct)
-                or not _still_in_place(result.observed_mask, before)):
+                or not _still_in_place(result.observed_mask, shape_args.get("last_observed"))):
             return None
         second = check_shape(**dict(shape_args, anchor=result.best_candidate, max_drift=0))
         if second.usable and second.passed and second.error_pct <= threshold / 2.0:
