@@ -16,9 +16,15 @@ def dilate(mask: np.ndarray, radius: float) -> np.ndarray:
         return mask.astype(bool)
     if radius <= 2.5:
         return cv2.dilate(mask.astype(np.uint8), disk(radius)).astype(bool)
-    if not mask.any():
-        return np.zeros(mask.shape, bool)
-    return cv2.distanceTransform((~mask.astype(bool)).astype(np.uint8), cv2.DIST_L2, 3) <= radius
+    out = np.zeros(mask.shape, bool)
+    # (on the box that can be reached only: the 3x3 distance grows by at least 0.955 px per px, so nothing
+    # beyond that box is within ``radius``, and inside it the distances are the whole image's)
+    box = bounding_box(mask, pad=int(np.ceil(radius / 0.955)) + 1)
+    if box is None:
+        return out
+    inner = (slice(box[0], box[1]), slice(box[2], box[3]))
+    out[inner] = cv2.distanceTransform((~mask[inner].astype(bool)).astype(np.uint8), cv2.DIST_L2, 3) <= radius
+    return out
 
 
 def erode(mask: np.ndarray, radius: float) -> np.ndarray:
@@ -27,8 +33,15 @@ def erode(mask: np.ndarray, radius: float) -> np.ndarray:
         return mask.astype(bool)
     if radius <= 2.5:
         return cv2.erode(mask.astype(np.uint8), disk(radius), borderType=cv2.BORDER_REPLICATE).astype(bool)
-    padded = cv2.copyMakeBorder(mask.astype(np.uint8), 1, 1, 1, 1, cv2.BORDER_REPLICATE)
-    return cv2.distanceTransform(padded, cv2.DIST_L2, 3)[1:-1, 1:-1] > radius
+    out = np.zeros(mask.shape, bool)
+    # (on the mask's box with a ring of background around it, which every distance from inside reaches first)
+    box = bounding_box(mask, pad=1)
+    if box is None:
+        return out
+    inner = (slice(box[0], box[1]), slice(box[2], box[3]))
+    padded = cv2.copyMakeBorder(mask[inner].astype(np.uint8), 1, 1, 1, 1, cv2.BORDER_REPLICATE)
+    out[inner] = cv2.distanceTransform(padded, cv2.DIST_L2, 3)[1:-1, 1:-1] > radius
+    return out
 
 
 def shift_mask(mask: np.ndarray, dx: int, dy: int) -> np.ndarray:
@@ -86,20 +99,27 @@ def reaching_in_from_above(objects: np.ndarray, search: np.ndarray, expected: np
     sideways is the print's), and it does not reach down into the ``expected`` part's lowest quarter (a part
     that tipped over and stands taller than the box does).
     """
-    count, labels = cv2.connectedComponents(objects.astype(np.uint8), connectivity=8)
+    out = np.zeros(objects.shape, bool)
+    box = bounding_box(objects)
+    if box is None:
+        return out
+    # (on the objects' box only: every blob lies in it, and the whole frame costs several times more)
+    y0, y1, x0, x1 = box
+    inner = (slice(y0, y1), slice(x0, x1))
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(objects[inner].astype(np.uint8), connectivity=8)
     if count <= 1:
-        return np.zeros(objects.shape, bool)
-    area = np.bincount(labels.ravel(), minlength=count)
-    beyond = np.bincount(labels.ravel(), weights=(~search).ravel().astype(np.float64), minlength=count)
-    ceiling = np.where(search.any(axis=0), np.argmax(search, axis=0), search.shape[0])
-    above = np.arange(search.shape[0])[:, None] < ceiling[None, :]
-    from_above = np.bincount(labels.ravel(), weights=above.ravel().astype(np.float64), minlength=count)
+        return out
+    area = stats[:, cv2.CC_STAT_AREA]
+    ceiling = np.where(search.any(axis=0), np.argmax(search, axis=0), search.shape[0])[x0:x1]
+    above = np.arange(y0, y1)[:, None] < ceiling[None, :]
+    beyond = np.bincount(labels[~search[inner]], minlength=count)
+    from_above = np.bincount(labels[above], minlength=count)
     foreign = (beyond >= 0.15 * np.maximum(area, 1)) & (from_above >= 0.05 * np.maximum(area, 1))
     rows = np.flatnonzero(expected.any(axis=1))
     if rows.size:
         foot_zone = rows[-1] - 0.25 * (rows[-1] - rows[0])
-        lowest = np.zeros(count, np.int64)
-        np.maximum.at(lowest, labels[objects], np.nonzero(objects)[0])
+        lowest = y0 + stats[:, cv2.CC_STAT_TOP] + stats[:, cv2.CC_STAT_HEIGHT] - 1
         foreign &= lowest < foot_zone
     foreign[0] = False
-    return foreign[labels]
+    out[inner] = foreign[labels]
+    return out

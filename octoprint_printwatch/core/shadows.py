@@ -27,6 +27,11 @@ TEXTURE_WINDOW = 11
 TEXTURE_MIN_Z = 2.0
 #: Where the bed shows a pattern, the frame must correlate with it at least this well to be the same bed.
 MIN_CORRELATION = 0.5
+#: How far (px) a pixel's correlation reads around it: the window's half side plus the 1-px shift.
+_CORRELATION_REACH = TEXTURE_WINDOW // 2 + 1
+#: How far (px) the test of one pixel reads around it, at most (the window's half side over the 5x5
+#: median's residual, grown by the 5x5 dilation of the background's edges: 9), with a margin.
+_READS = 12
 
 
 def shadow_left(luma_f: np.ndarray, luma_b: np.ndarray, sample: np.ndarray, bright_noise: float,
@@ -43,38 +48,40 @@ def shadow_left(luma_f: np.ndarray, luma_b: np.ndarray, sample: np.ndarray, brig
     than the bed too) only the correlation with the bed's grain tells the bed, never its absence. A head's
     or gantry's shadow is large: a region that passes is kept only where a quarter of it lies outside
     ``surroundings`` ((h, w) bool, the part's surroundings), so a reflection or a skirt next to the part
-    never passes for one. The work is done on the box around ``where`` only (which on many scenes holds
-    the part's own lit faces: about 7 ms per camera-check on the benchmark, see docs/detection-shadows.md)."""
+    never passes for one. The work is done on the box around the pixels that may have been in a shadow only
+    (on many scenes the part's own lit faces: about 2-3 ms per camera-check, see docs/detection-shadows.md)."""
     out = np.zeros(luma_f.shape, bool)
     if sample.size < 50 or not where.any():
         return out
     # the lit bed: its upper quartile (most of the certain bed is lit in one of the two images; a higher
     # percentile would reach the glass's glare or a bright backdrop, which a white part can match)
     lit = max(float(np.percentile(luma_b.ravel()[sample], 75)), float(np.percentile(luma_f.ravel()[sample], 75)))
-    y0, y1, x0, x1 = bounding_box(where, pad=TEXTURE_WINDOW + 3)
-    box = (slice(y0, y1), slice(x0, x1))
-    out[box] = where[box] & _shading_only(luma_f[box], luma_b[box], lit + factor * bright_noise, bright_noise,
-                                          factor, min_ratio, prior[box])
+    # ... and brighter by at most the factor a shadow can take away (it keeps ``min_ratio`` of the light):
+    # a lit part in front of a dark backdrop is brighter than that
+    candidate = where & (luma_f <= lit + factor * bright_noise) & (luma_f <= luma_b / min_ratio + factor * bright_noise)
+    # the rest reads at most _READS px around a candidate, so the box around them gives the same answer
+    box = bounding_box(candidate, pad=_READS)
+    if box is None:
+        return out
+    y0, y1, x0, x1 = box
+    inner = (slice(y0, y1), slice(x0, x1))
+    passed = candidate[inner] & _shading_only(luma_f[inner], luma_b[inner], bright_noise, factor, prior[inner])
     # (regions are grouped across gaps of a few pixels: grain and noise break a shadow's area up)
-    grouped = cv2.dilate(out.astype(np.uint8), np.ones((7, 7), np.uint8))
+    grouped = cv2.dilate(passed.astype(np.uint8), np.ones((7, 7), np.uint8))
     count, labels = cv2.connectedComponents(grouped, connectivity=8)
     if count > 1:
-        area = np.bincount(labels.ravel(), weights=out.ravel().astype(np.float64), minlength=count)
-        near = np.bincount(labels.ravel(), weights=(out & surroundings).ravel().astype(np.float64), minlength=count)
+        area = np.bincount(labels[passed], minlength=count)
+        near = np.bincount(labels[passed & surroundings[inner]], minlength=count)
         large = near <= 0.75 * area
         large[0] = False
-        out &= large[labels]
+        passed &= large[labels]
+    out[inner] = passed
     return out
 
 
-def _shading_only(luma_f: np.ndarray, luma_b: np.ndarray, lit: float, bright_noise: float,
-                  factor: float, min_ratio: float, prior: np.ndarray) -> np.ndarray:
-    """(h, w) bool, see :func:`shadow_left` (``lit``: the brightest the lit bed can look)."""
-    # ... and by at most the factor a shadow can take away (it keeps SHADOW_MIN_RATIO of the light): a
-    # lit part in front of a dark backdrop is brighter than that
-    candidate = (luma_f <= lit) & (luma_f <= luma_b / min_ratio + factor * bright_noise)
-    if not candidate.any():
-        return candidate
+def _shading_only(luma_f: np.ndarray, luma_b: np.ndarray, bright_noise: float, factor: float,
+                  prior: np.ndarray) -> np.ndarray:
+    """(h, w) bool: where a brightening keeps the bed's pattern and is no thin line, see :func:`shadow_left`."""
     # the bed's grain, without edges: a 5x5 median keeps a shadow's edge (in the background, not in the
     # frame, once the shadow left) and removes the grain, so the residual holds the grain alone
     smooth_b = cv2.medianBlur(luma_b, 5)
@@ -92,22 +99,30 @@ def _shading_only(luma_f: np.ndarray, luma_b: np.ndarray, lit: float, bright_noi
     edge_b = (np.abs(gx) + np.abs(gy)) * 0.25 > factor * bright_noise + 2.0 * np.sqrt(var_b)
     textured &= ~cv2.dilate(edge_b.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
     correlation = np.full(luma_f.shape, -1.0, np.float32)
-    if (candidate & textured).any():
+    asked = bounding_box(textured, pad=_CORRELATION_REACH)
+    if asked is not None:
         # the best of the nine 1-px shifts: a shaken camera moves the grain, the light does not change it
-        h, w = luma_f.shape
-        padded = [cv2.copyMakeBorder(a, 1, 1, 1, 1, cv2.BORDER_REPLICATE) for a in (grain_b, mean_b, var_b)]
+        # (only around the pixels that ask: a pixel's correlation reads _CORRELATION_REACH px around it, so
+        # it is the same on that box as on the whole crop, and the box is often far smaller)
+        y0, y1, x0, x1 = asked
+        inner = (slice(y0, y1), slice(x0, x1))
+        h, w = y1 - y0, x1 - x0
+        padded = [cv2.copyMakeBorder(a, 1, 1, 1, 1, cv2.BORDER_REPLICATE)[y0:y1 + 2, x0:x1 + 2]
+                  for a in (grain_b, mean_b, var_b)]
+        g_f, m_f, v_f = grain_f[inner], mean_f[inner], var_f[inner]
+        best = correlation[inner]
         for dy in (0, 1, 2):
             for dx in (0, 1, 2):
                 g_b, m_b, v_b = (a[dy:dy + h, dx:dx + w] for a in padded)
-                cov = cv2.blur(grain_f * g_b, win) - mean_f * m_b
-                np.maximum(correlation, cov / np.sqrt(np.maximum(var_f * v_b, 1e-6)), out=correlation)
+                cov = cv2.blur(g_f * g_b, win) - m_f * m_b
+                np.maximum(best, cov / np.sqrt(np.maximum(v_f * v_b, 1e-6)), out=best)
     # a strand (thin, darker or brighter than both its sides) is no shadow's edge, which is a step the
     # median keeps; nor is it the bed's grain, brightened with the bed
     light_back = np.maximum(cv2.blur(luma_f, win) / np.maximum(cv2.blur(luma_b, win), 1.0), 1.0)
     thin = np.abs(grain_f) > factor * bright_noise + 3.0 * light_back * np.sqrt(var_b)
     thin = cv2.dilate(thin.astype(np.uint8), np.ones((3, 3), np.uint8)).astype(bool)
     same_grain = textured & (correlation >= MIN_CORRELATION)
-    return candidate & ~thin & np.where(prior, same_grain, same_grain | ~textured)
+    return ~thin & np.where(prior, same_grain, same_grain | ~textured)
 
 
 def shade_of_clipped_bed(frame: np.ndarray, background: np.ndarray, clipped: np.ndarray, tolerance: float,

@@ -653,19 +653,18 @@ def compare_masks(
         # anything that also rises out of that zone (spaghetti, a moved part) counts in full
         count, labels = cv2.connectedComponents(extra.astype(np.uint8), connectivity=8)
         area = np.bincount(labels.ravel(), minlength=count)
-        inside = np.bincount(labels.ravel(), weights=dont_care.ravel().astype(np.float64), minlength=count)
+        inside = np.bincount(labels[dont_care], minlength=count)
         # ... and thin: a part that slid 10 mm also sits in that zone, but stands far thicker
         depth = cv2.distanceTransform(extra.astype(np.uint8), cv2.DIST_L2, 3)
         thickness = np.zeros(count, np.float32)
-        np.maximum.at(thickness, labels.ravel(), depth.ravel())
+        np.maximum.at(thickness, labels[extra], depth[extra])
         flat = (inside >= 0.8 * np.maximum(area, 1)) & (2.0 * thickness <= flat_max_px)
         if reflection is not None:
             # a brim and the part's reflection touch at the part's foot and merge into one blob: it lies
             # in the union of the two zones, not (80 %) in either. A part that slid into these zones is
             # still found, by :func:`displaced_part`, from the material missing where it belongs.
-            mirrored = np.bincount(labels.ravel(), weights=reflection.ravel().astype(np.float64), minlength=count)
-            either = np.bincount(labels.ravel(), weights=(reflection | dont_care).ravel().astype(np.float64),
-                                 minlength=count)
+            mirrored = np.bincount(labels[reflection], minlength=count)
+            either = np.bincount(labels[reflection | dont_care], minlength=count)
             flat |= (mirrored >= 0.8 * np.maximum(area, 1)) | (either >= 0.8 * np.maximum(area, 1))
         flat[0] = False
         extra &= ~flat[labels]
