@@ -13,7 +13,7 @@ colour of the bed) is not.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Mapping
+from typing import Mapping, Sequence
 
 import cv2
 import numpy as np
@@ -27,11 +27,27 @@ SHIFT_CONFIRMED = 0.75
 SHIFT_CONFIRMED_ONE_VIEW = 0.85
 #: Cameras whose image x follows bed directions at least this far apart look from different places.
 VIEWPOINT_APART_DEG = 30.0
+#: A direction counts as a viewpoint only where the shift changes at least this share of the pooled
+#: pixels it changes in its cameras together: a camera that sees (almost) nothing change there neither
+#: confirms nor contradicts it, so it is no second view of the shift.
+VIEWPOINT_MIN_SHARE = 0.15
 #: Contradicting pixels allowed, as a share of the confirming ones.
 SHIFT_AGAINST = 0.25
 #: The shift must explain the image at least this much better than "the part stands a little taller
 #: or lower" does (the null hypothesis; both scored as support - 2 x against).
 SHIFT_OVER_NULL = 2.0
+#: A shift seen at two consecutive checks (the same bed shift confirmed by each check's own views) that
+#: the check before them did not show: everything printed after a layer shift stays offset, while a
+#: one-check margin case (noise, a strand, a shadow) does not persist, and a calibration residual or an
+#: alignment slip was there before too. Then a lower share suffices, at both checks.
+SHIFT_PERSISTS_CONFIRMED = 0.62
+SHIFT_PERSISTS_CONFIRMED_ONE_VIEW = 0.70
+#: ... and the check before them confirmed it less than this (the shift is new). Other checks' evidence
+#: is read at the best bed shift within SHIFT_PERSISTS_WITHIN_MM of the one found now: the band printed
+#: across the onset fits a smaller move than the layers after it, and one pixel (0.2-0.3 mm) changes a
+#: share by 0.1 or more.
+SHIFT_WAS_NOT_THERE = 0.5
+SHIFT_PERSISTS_WITHIN_MM = 1.0
 #: Confirming pixels needed in all (at the 640-px working width: a band's edge a few px wide and tall),
 #: from several directions and from one.
 SHIFT_MIN_SUPPORT_PX = 60
@@ -82,7 +98,9 @@ class LayerShift:
     shift_mm : (2,) printer X/Y (mm) by which the newest layers sit off.
     support, against, moved : summed over the cameras in whose reach it lies.
     null_score : the same cameras' best "the part stands taller or lower" explanation, summed.
-    viewpoints : how many clearly different directions (VIEWPOINT_APART_DEG) those cameras look from.
+    viewpoints : how many clearly different directions (VIEWPOINT_APART_DEG) those cameras look from,
+        of those with a share of the evidence (VIEWPOINT_MIN_SHARE of ``moved``).
+    moved_by : {camera: pixels the shift changes in it (weighted as pooled)}.
     cameras : the cameras it shows to clearly (image shift of at least their ``min_dx``), with their px shift.
     """
 
@@ -93,6 +111,10 @@ class LayerShift:
     cameras: dict[str, tuple[int, int]]
     null_score: float = 0.0
     viewpoints: int = 1   # of those cameras, how many look from clearly different directions
+    moved_by: dict[str, float] = field(default_factory=dict)
+    # the same shift read in the views of the (up to four) checks before this one that tested their own
+    # newest band, newest first (None: nothing there changes); see with_history
+    before: list = field(default_factory=list)
 
     @property
     def score(self) -> float:
@@ -107,10 +129,19 @@ class LayerShift:
         return float(np.hypot(*self.shift_mm))
 
     def figures(self) -> dict:
-        return {"shift_mm": [round(float(v), 2) for v in self.shift_mm], "confirmed": round(self.confirmed, 3),
-                "support": self.support, "against": self.against, "moved": self.moved,
-                "null_score": round(self.null_score, 1), "viewpoints": self.viewpoints,
-                "cameras": {name: list(d) for name, d in self.cameras.items()}}
+        figures = {"shift_mm": [round(float(v), 2) for v in self.shift_mm], "confirmed": round(self.confirmed, 3),
+                   "support": self.support, "against": self.against, "moved": self.moved,
+                   "null_score": round(self.null_score, 1), "viewpoints": self.viewpoints,
+                   "cameras": {name: list(d) for name, d in self.cameras.items()},
+                   "moved_by": {name: round(float(v)) for name, v in self.moved_by.items()}}
+        if self.before:
+            figures["before_confirmed"] = [0.0 if e is None else round(e.confirmed, 3) for e in self.before]
+        return figures
+
+    @property
+    def previous(self) -> "LayerShift | None":
+        """The same shift read in the previous check's views (None: unknown, or nothing changes there)."""
+        return self.before[0] if self.before else None
 
 
 def band_shift(observed: np.ndarray, bed: np.ndarray, before: np.ndarray, band: np.ndarray,
@@ -237,11 +268,28 @@ def estimate_layer_shift(views: Mapping[str, BandShift], *, max_mm: float = 8.0,
     """
     steps = np.arange(-max_mm, max_mm + 1e-9, step_mm)
     gx, gy = np.meshgrid(steps, steps)
-    grid = np.stack([gx.ravel(), gy.ravel()], axis=1)            # (n, 2) mm
+    return _pooled(views, np.stack([gx.ravel(), gy.ravel()], axis=1))
+
+
+def layer_shift_at(views: Mapping[str, BandShift], shift_mm, within_mm: float = 0.0,
+                   step_mm: float = 0.25) -> LayerShift | None:
+    """The cameras' best pooled evidence (as in :func:`estimate_layer_shift`) for a bed shift within
+    ``within_mm`` of ``shift_mm`` ((2,) printer X/Y mm): how well another check's views confirm the
+    shift found now. None when none of them shows clearly to any camera."""
+    centre = np.asarray(shift_mm, np.float64).reshape(1, 2)
+    steps = np.arange(-within_mm, within_mm + 1e-9, step_mm) if within_mm > 0 else np.zeros(1)
+    gx, gy = np.meshgrid(steps, steps)
+    offsets = np.stack([gx.ravel(), gy.ravel()], axis=1)
+    offsets = offsets[np.hypot(offsets[:, 0], offsets[:, 1]) <= within_mm + 1e-9]
+    return _pooled(views, centre + offsets)
+
+
+def _pooled(views: Mapping[str, BandShift], grid: np.ndarray) -> LayerShift | None:
+    """The best of the (n, 2) bed shifts ``grid`` (mm) by the pooled score (estimate_layer_shift)."""
     total = np.zeros((3, len(grid)), np.float64)
     null = np.zeros(len(grid), np.float64)
     clear = np.zeros(len(grid), bool)          # the shift shows clearly in at least one camera
-    shows, directions = {}, {}
+    shows, directions, moved_by = {}, {}, {}
     for name, view in views.items():
         if view.maps is None or view.bed_to_image is None:
             continue
@@ -259,6 +307,7 @@ def estimate_layer_shift(views: Mapping[str, BandShift], *, max_mm: float = 8.0,
         weight = np.clip((np.abs(image[:, 0]) - 0.5 * view.min_dx) / (0.5 * view.min_dx), 0.0, 1.0) * ok
         values = np.zeros((3, len(grid)))
         values[:, ok] = view.maps[:, iy[ok], ix[ok]]
+        moved_by[name] = values[2] * weight
         total += values * weight
         null += view.null_score * weight
         clear |= weight >= 1.0
@@ -271,40 +320,99 @@ def estimate_layer_shift(views: Mapping[str, BandShift], *, max_mm: float = 8.0,
     if not np.isfinite(score[best]):
         return None
     cameras = {name: (int(image[best, 0]), int(image[best, 1])) for name, (ok, image) in shows.items() if ok[best]}
+    share = {name: float(moved_by[name][best]) for name in cameras}
     return LayerShift(shift_mm=grid[best].copy(), support=int(round(total[0, best])),
                       against=int(round(total[1, best])), moved=int(round(total[2, best])), cameras=cameras,
-                      null_score=float(null[best]),
-                      viewpoints=_viewpoints([directions[name] for name in cameras]))
+                      null_score=float(null[best]), moved_by=share,
+                      viewpoints=_viewpoints({name: directions[name] for name in cameras}, share,
+                                             VIEWPOINT_MIN_SHARE * float(total[2, best])))
 
 
-def _viewpoints(directions: list[float]) -> int:
-    """How many of the bed directions (radians, mod pi) differ from each other by VIEWPOINT_APART_DEG:
-    the two cameras of a stereo pair look from nearly one place and count once."""
-    kept: list[float] = []
+def _viewpoints(directions: Mapping[str, float], moved_by: Mapping[str, float] | None = None,
+                min_moved: float = 0.0) -> int:
+    """How many clearly different directions the cameras look from: bed directions (radians, mod pi) less
+    than VIEWPOINT_APART_DEG apart count once (the two cameras of a stereo pair look from nearly one
+    place), and a direction counts only where the shift changes at least ``min_moved`` pixels in its
+    cameras together (``moved_by``, per camera)."""
     apart = np.radians(VIEWPOINT_APART_DEG)
-    for angle in directions:
-        if all(min(abs(angle - k) % np.pi, np.pi - abs(angle - k) % np.pi) >= apart for k in kept):
-            kept.append(angle)
-    return len(kept)
+    moved_by = moved_by or {}
+    kept: list[list] = []            # [direction, pixels changed] per viewpoint, the most changed first
+    for name in sorted(directions, key=lambda n: -moved_by.get(n, 0.0)):
+        angle = directions[name]
+        for group in kept:
+            if min(abs(angle - group[0]) % np.pi, np.pi - abs(angle - group[0]) % np.pi) < apart:
+                group[1] += moved_by.get(name, 0.0)
+                break
+        else:
+            kept.append([angle, moved_by.get(name, 0.0)])
+    return sum(1 for _, moved in kept if moved >= min_moved)
+
+
+def with_history(shift: LayerShift | None,
+                 history: Sequence[tuple[bool, Mapping[str, BandShift]]]) -> LayerShift | None:
+    """``shift`` with the same bed shift (within SHIFT_PERSISTS_WITHIN_MM) read in the views of the checks
+    before it: ``history`` holds (tested, views) of those checks, oldest first, where ``views`` is what
+    :func:`band_shift` gave per camera and ``tested`` says the check had a check before it (the first
+    check's band is the whole part, not the newest layers). Fills ``before``: the last four checks,
+    newest first, up to the first that did not test its band."""
+    if shift is None:
+        return None
+    shift.before = []
+    for tested, views in reversed(list(history[-4:])):
+        if not (tested and views):
+            break
+        shift.before.append(layer_shift_at(views, shift.shift_mm, SHIFT_PERSISTS_WITHIN_MM))
+    return shift
+
+
+def _was_there(shift: LayerShift | None) -> bool:
+    return shift is not None and shift.confirmed >= SHIFT_WAS_NOT_THERE
+
+
+def _confirms(shift: LayerShift, min_mm: float, several_share: float, one_view_share: float) -> bool:
+    several = shift.viewpoints >= 2
+    return (bool(shift.cameras) and shift.magnitude_mm >= min_mm
+            and shift.support >= (SHIFT_MIN_SUPPORT_PX if several else SHIFT_MIN_SUPPORT_ONE_VIEW_PX)
+            and shift.confirmed >= (several_share if several else one_view_share)
+            and shift.against <= SHIFT_AGAINST * shift.support
+            and shift.score >= SHIFT_OVER_NULL * shift.null_score)
+
+
+def persists(shift: LayerShift, min_mm: float) -> bool:
+    """Whether the shift is new and seen at two consecutive checks: confirmed now and in the previous
+    check's views by SHIFT_PERSISTS_CONFIRMED (one view: ..._ONE_VIEW, the other rules as
+    :func:`confirms_layer_shift`), and by less than SHIFT_WAS_NOT_THERE at the check before them (all three
+    checks testing their own band; see :func:`with_history`)."""
+    return (len(shift.before) >= 2 and shift.before[0] is not None and not _was_there(shift.before[1])
+            and _confirms(shift, min_mm, SHIFT_PERSISTS_CONFIRMED, SHIFT_PERSISTS_CONFIRMED_ONE_VIEW)
+            and _confirms(shift.before[0], min_mm, SHIFT_PERSISTS_CONFIRMED, SHIFT_PERSISTS_CONFIRMED_ONE_VIEW))
+
+
+def was_there_before(shift: LayerShift) -> bool:
+    """Whether at least three checks before this one (and every one of the last four that tested its band)
+    showed this shift already (SHIFT_WAS_NOT_THERE): an offset there all along is a calibration residual or
+    an alignment slip of the whole part, not layers that slid since. A real shift has a check without it
+    just before its onset, so this hides only one left unconfirmed for four checks."""
+    return len(shift.before) >= 3 and all(_was_there(e) for e in shift.before)
 
 
 def confirms_layer_shift(shift: LayerShift, min_mm: float) -> bool:
-    """Whether the pooled evidence says the newest layers were printed shifted by ``min_mm`` or more.
+    """Whether the pooled evidence says the newest layers were printed shifted by ``min_mm`` or more:
+    at this check alone (SHIFT_CONFIRMED, ..._ONE_VIEW), or new and seen at two checks (:func:`persists`),
+    and not there all along (:func:`was_there_before`).
 
     The thresholds are shares of pixels (scale-free); see docs/detection.md for what they were
     measured on.
     """
-    several = shift.viewpoints >= 2
-    return (bool(shift.cameras) and shift.magnitude_mm >= min_mm
-            and shift.support >= (SHIFT_MIN_SUPPORT_PX if several else SHIFT_MIN_SUPPORT_ONE_VIEW_PX)
-            and shift.confirmed >= (SHIFT_CONFIRMED if several else SHIFT_CONFIRMED_ONE_VIEW)
-            and shift.against <= SHIFT_AGAINST * shift.support
-            and shift.score >= SHIFT_OVER_NULL * shift.null_score)
+    return ((_confirms(shift, min_mm, SHIFT_CONFIRMED, SHIFT_CONFIRMED_ONE_VIEW) or persists(shift, min_mm))
+            and not was_there_before(shift))
 
 
 def describe_layer_shift(shift: LayerShift) -> str:
     """One line for the user: how far, which way, seen by whom."""
     dx, dy = (float(v) for v in shift.shift_mm)
+    twice = (f", and {shift.previous.confirmed:.0%} at the previous check"
+             if shift.previous is not None and persists(shift, 0.0) else "")
     return (f"the newest layers sit {shift.magnitude_mm:.1f} mm sideways on the layers below "
             f"(X {dx:+.1f} mm, Y {dy:+.1f} mm), confirmed by {', '.join(sorted(shift.cameras))}"
-            f" ({shift.confirmed:.0%} of the evidence): layer shift?")
+            f" ({shift.confirmed:.0%} of the evidence{twice}): layer shift?")

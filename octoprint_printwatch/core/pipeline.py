@@ -23,7 +23,8 @@ import numpy as np
 from .camera import Camera
 from .errors import PrintWatchError
 from .settings import DetectionSettings
-from .layer_shift import LayerShift, confirms_layer_shift, describe_layer_shift, estimate_layer_shift
+from .layer_shift import (BandShift, LayerShift, confirms_layer_shift, describe_layer_shift, estimate_layer_shift,
+                          with_history)
 from .shape_check import ExpectedRegions, ShapeResult, check_shape, not_decisive_where_calibrated
 from .tangle import loose_material
 
@@ -368,10 +369,19 @@ class CheckResult:
         }
 
 
-def layer_shift_of(shape: Mapping[str, ShapeResult]) -> LayerShift | None:
-    """The bed shift of the newest layers that the usable cameras confirm together (or None)."""
-    return estimate_layer_shift({cam: r.band_shift for cam, r in shape.items()
-                                 if r.usable and r.band_shift is not None})
+def band_shifts_of(shape: Mapping[str, ShapeResult]) -> dict[str, BandShift]:
+    """{camera: BandShift}: the layer-shift evidence of the usable cameras that tested their newest band."""
+    return {cam: r.band_shift for cam, r in shape.items() if r.usable and r.band_shift is not None}
+
+
+def layer_shift_of(shape: Mapping[str, ShapeResult],
+                   history: Sequence[tuple[bool, Mapping[str, BandShift]]] = ()) -> LayerShift | None:
+    """The bed shift of the newest layers that the usable cameras confirm together (or None).
+
+    ``history``: (had a check before it, band_shifts_of) of the previous checks, oldest first: the evidence
+    for the same shift at those checks (``core.layer_shift.with_history``).
+    """
+    return with_history(estimate_layer_shift(band_shifts_of(shape)), history)
 
 
 def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings: DetectionSettings,
@@ -511,6 +521,8 @@ class CheckRunner:
         self.previous_z: float | None = None
         self.keep_pictures = True
         self.size_checks: dict = {}  # "left+right" -> stereo.PairSizeCheck, kept for the whole print
+        # the last four checks' layer-shift evidence: (had a check before it, {camera: BandShift})
+        self.band_shift_history: list[tuple[bool, dict]] = []
 
     def run_check(self, layer: int, z: float, frames: Mapping[str, np.ndarray | None]) -> CheckResult:
         """Shape check per camera (size per pair once wired in) and the combined verdict."""
@@ -584,7 +596,8 @@ class CheckRunner:
         shape_seconds = time.perf_counter() - started
         shape_cpu_seconds = time.process_time() - cpu_started
         size = self._size_check(z, frames, shape)
-        layer_shift = layer_shift_of(shape)
+        layer_shift = layer_shift_of(shape, self.band_shift_history)
+        self.band_shift_history = [*self.band_shift_history, (self.previous_z is not None, band_shifts_of(shape))][-4:]
         top_closing = self.plan.top_closing(z)
         verdict, reasons = decide(shape, size, settings, unreadable, layer_shift=layer_shift,
                                   top_closing=top_closing)

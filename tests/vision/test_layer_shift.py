@@ -2,7 +2,8 @@
 newest band at once) and pooled over cameras (one shift on the bed that every view must agree with)."""
 import numpy as np
 
-from octoprint_printwatch.core.layer_shift import band_shift, confirms_layer_shift, estimate_layer_shift
+from octoprint_printwatch.core.layer_shift import (band_shift, confirms_layer_shift, estimate_layer_shift,
+                                                   layer_shift_at, with_history)
 from octoprint_printwatch.core.masks import shift_mask
 
 from .synthetic import Box
@@ -75,3 +76,90 @@ def test_a_small_shift_of_a_wide_part_is_found():
     base, band = Box(40, 110, 280, 170), Box(40, 80, 280, 110)
     found = view(base.mask() | band.moved(6, 0).mask(), before=base.mask(), band=band.mask())
     assert (found.dx, found.dy) == (6, 0) and found.confirmed > 0.8
+
+
+# One camera seeing printer X sideways at 5 px/mm: a 10-px move of the band is a 2-mm layer shift.
+J_ONE = [[5.0, 0.0], [0.0, -2.0]]
+
+
+def partly_hidden_shift(dx=10):
+    """One camera's evidence for the band printed ``dx`` px sideways where a fifth of what the move changes
+    is neither material nor bed (a top face the colour of the bed): about 0.8 confirmed, under the 0.85 one
+    view needs at one check."""
+    observed = BASE.mask() | BAND.moved(dx, 0).mask()
+    hidden = Box(210, 80, 210 + dx, 92).mask()
+    found = view(observed & ~hidden, bed=~observed & ~hidden, J=J_ONE)
+    return {"cam": found}
+
+
+def in_place():
+    return {"cam": view(BASE.mask() | BAND.mask(), J=J_ONE)}
+
+
+def checks(*views, first_tested=True):
+    """with_history's history: the checks before this one, oldest first (the oldest tested its band
+    only when ``first_tested``)"""
+    return [(first_tested or i > 0, v) for i, v in enumerate(views)]
+
+
+def test_a_shift_seen_at_two_checks_that_was_not_there_before_is_confirmed_at_a_lower_share():
+    now = estimate_layer_shift(partly_hidden_shift())
+    assert np.allclose(now.shift_mm, [2.0, 0.0], atol=0.3)
+    assert 0.75 <= now.confirmed < 0.85 and now.viewpoints == 1
+    assert not confirms_layer_shift(now, 1.5)                       # one check, one view: not enough
+    seen_twice = with_history(now, checks(in_place(), partly_hidden_shift()))
+    assert seen_twice.previous.confirmed >= 0.75 and seen_twice.before[1].confirmed < 0.5
+    assert confirms_layer_shift(seen_twice, 1.5)
+
+
+def test_a_shift_seen_once_or_that_was_there_before_is_not_confirmed_at_the_lower_share():
+    once = with_history(estimate_layer_shift(partly_hidden_shift()), checks(in_place(), in_place()))
+    assert not confirms_layer_shift(once, 1.5)
+    # the same offset at three checks in a row: a calibration residual or an alignment slip, not a new move
+    always = with_history(estimate_layer_shift(partly_hidden_shift()),
+                          checks(partly_hidden_shift(), partly_hidden_shift()))
+    assert not confirms_layer_shift(always, 1.5)
+    # nothing known from before the two checks (the first check's band is the whole part): no lower share
+    unknown = with_history(estimate_layer_shift(partly_hidden_shift()),
+                           checks(in_place(), partly_hidden_shift(), first_tested=False))
+    assert not confirms_layer_shift(unknown, 1.5)
+
+
+def test_an_offset_there_all_along_is_no_layer_shift_however_clear():
+    clear = {"cam": view(BASE.mask() | BAND.moved(10, 0).mask(), J=J_ONE)}
+    now = estimate_layer_shift(clear)
+    assert confirms_layer_shift(now, 1.5)                                  # alone: as clear as it gets
+    # there for three checks, after one without it: still a shift that happened (left unconfirmed)
+    assert confirms_layer_shift(with_history(now, checks(in_place(), clear, clear, clear)), 1.5)
+    # there at every check since the first that tested its band: a calibration residual or alignment slip
+    assert not confirms_layer_shift(with_history(estimate_layer_shift(clear), checks(clear, clear, clear, clear)), 1.5)
+    assert not confirms_layer_shift(
+        with_history(estimate_layer_shift(clear), checks(in_place(), clear, clear, clear, first_tested=False)), 1.5)
+
+
+def test_another_checks_evidence_is_read_near_the_shift_found_now():
+    # the band printed across the onset fits a slightly smaller move than the layers after it
+    earlier = partly_hidden_shift(dx=9)
+    assert layer_shift_at(earlier, [2.0, 0.0]).confirmed < layer_shift_at(earlier, [2.0, 0.0], 0.5).confirmed
+
+
+def test_a_camera_that_sees_nothing_change_is_no_second_viewpoint():
+    # a second camera from another direction shows the shift sideways, but everything it would change is
+    # hidden (the newest band behind older layers, its surroundings undecided): it confirms nothing and
+    # contradicts nothing, so the shift is still seen from one direction and needs the one-view share
+    J_OTHER = [[3.0, 5.0], [2.0, 0.0]]
+    blind = band_shift(BASE.mask() | BAND.mask(), ~(BASE.mask() | BAND.mask()), BASE.mask() | BAND.mask(),
+                       BAND.mask(), 24, 12, 5, 2.0, undecided=~(BASE.mask() | BAND.mask()), bed_to_image=J_OTHER)
+    found = estimate_layer_shift({**partly_hidden_shift(), "blind": blind})
+    assert "blind" in found.cameras and found.moved_by["blind"] < 0.05 * found.moved
+    assert found.viewpoints == 1
+    assert 0.75 <= found.confirmed < 0.85 and not confirms_layer_shift(found, 1.5)
+
+
+def test_the_cameras_of_a_stereo_pair_add_up_to_one_viewpoint():
+    # two directions 60 deg apart; the pair's cameras each carry a tenth of the changed pixels, together a fifth
+    from octoprint_printwatch.core.layer_shift import VIEWPOINT_MIN_SHARE, _viewpoints
+    directions = {"single": 0.0, "pairL": 1.05, "pairR": 1.10}
+    moved = {"single": 80.0, "pairL": 10.0, "pairR": 10.0}
+    assert _viewpoints(directions, moved, VIEWPOINT_MIN_SHARE * 100.0) == 2
+    assert _viewpoints({"single": 0.0, "pairL": 1.05}, {"single": 80.0, "pairL": 10.0}, VIEWPOINT_MIN_SHARE * 90.0) == 1
