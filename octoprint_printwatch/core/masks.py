@@ -123,3 +123,132 @@ def reaching_in_from_above(objects: np.ndarray, search: np.ndarray, expected: np
     foreign[0] = False
     out[inner] = foreign[labels]
     return out
+
+
+#: A rod or a gantry is at least this many times longer (within the picture) than it is thick.
+ROD_MIN_ELONGATION = 2.5
+#: A rod that ends behind the part is taken for one only while at most this share of the part is missing
+#: from its place (a part that tipped over or slid away can look as long and straight).
+ROD_BEHIND_PART_MAX_MISSING = 0.02
+#: ... and at least this share of it is seen there (a part that cannot be told apart is not known in place).
+ROD_BEHIND_PART_MIN_SEEN = 0.9
+#: Share of a rod's cross-sections that must be on its line and of its thickness (the rest: where
+#: something else touches it, the oblique cut at the picture's edge).
+ROD_REGULAR_SHARE = 0.8
+
+
+def crossing_the_box(objects: np.ndarray, search: np.ndarray, outline: np.ndarray,
+                     part_in_place: bool = True) -> np.ndarray:
+    """(h, w) bool: the pixels of ``objects`` that belong to a rod or a gantry crossing the ``search`` box
+    from the side, which are not the print's (the X rods, their reflection in a glass bed).
+
+    A rod is long, straight and of one thickness. The blobs of ``objects`` are taken apart from a 3-px ring
+    around the part's ``outline`` zone (where a shadow's fringe joins everything to the part). Along a
+    blob's principal axis its cross-sections (1 px apart; half a thickness at each end left out, where the
+    picture's edge cuts it obliquely, and those next to the part) keep their centre on one line (within a
+    quarter of the thickness, or 1.5 px) and their width (-40 %/+60 %), ROD_REGULAR_SHARE of them, and the
+    blob is ROD_MIN_ELONGATION times longer than thick. It leaves the box at both ends, or at one end while
+    the other runs on behind the part (it ends at the ring); then the part must stand where it belongs
+    (``part_in_place``: a part that tipped over or slid out of the box, which may look as long and
+    straight, is missing from its place). Only the strip along the fitted line is returned (with the ring's
+    pixels on it): whatever else touches the rod still counts. A tangle is not straight; a part that slid
+    or tipped over inside the box does not leave it at both ends.
+    """
+    out = np.zeros(objects.shape, bool)
+    outline_u8 = outline.astype(np.uint8)
+    ring = cv2.dilate(outline_u8, disk(3)).astype(bool) & objects
+    apart = objects & ~ring
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(apart.astype(np.uint8), connectivity=8)
+    if count <= 1:
+        return out
+    # a cheap first look: in the box and beyond it, and long (a blob of length L and thickness T has a
+    # bounding box whose diagonal is about L and an area of L T)
+    area = stats[:, cv2.CC_STAT_AREA].astype(np.float64)
+    diagonal_2 = stats[:, cv2.CC_STAT_WIDTH].astype(np.float64) ** 2 + stats[:, cv2.CC_STAT_HEIGHT] ** 2.0
+    candidates = (area >= 30) & (diagonal_2 >= ROD_MIN_ELONGATION * area)
+    candidates[0] = False
+    if not candidates.any():
+        return out
+    in_box = np.bincount(labels.ravel(), weights=search.ravel().astype(np.float64), minlength=count)
+    candidates &= (in_box > 0) & (in_box < area)
+    at_part = cv2.dilate(outline_u8, disk(5)).astype(bool)
+    h, w = objects.shape
+    for index in np.flatnonzero(candidates):
+        x0, y0 = stats[index, cv2.CC_STAT_LEFT], stats[index, cv2.CC_STAT_TOP]
+        x1, y1 = x0 + stats[index, cv2.CC_STAT_WIDTH], y0 + stats[index, cv2.CC_STAT_HEIGHT]
+        ys, xs = np.nonzero(labels[y0:y1, x0:x1] == index)
+        ys, xs = ys + y0, xs + x0
+        line = _rod_line(xs.astype(np.float64), ys.astype(np.float64), at_part[ys, xs], search[ys, xs],
+                         part_in_place)
+        if line is None:
+            continue
+        centre, direction, normal, first, last, half_width = line
+        # the strip along the line, over the blob's length and the ring at its ends
+        by0, by1, bx0, bx1 = max(0, y0 - 6), min(h, y1 + 6), max(0, x0 - 6), min(w, x1 + 6)
+        gy, gx = np.mgrid[by0:by1, bx0:bx1]
+        along = (gx - centre[0]) * direction[0] + (gy - centre[1]) * direction[1]
+        across = (gx - centre[0]) * normal[0] + (gy - centre[1]) * normal[1]
+        strip = (np.abs(across) <= half_width) & (along >= first - 6) & (along <= last + 6)
+        out[by0:by1, bx0:bx1] |= strip & ((labels[by0:by1, bx0:bx1] == index) | ring[by0:by1, bx0:bx1])
+    return out
+
+
+def _rod_line(xs: np.ndarray, ys: np.ndarray, at_part: np.ndarray, in_box: np.ndarray, part_in_place: bool):
+    """See :func:`crossing_the_box`: one blob's pixels (n,) with, per pixel, whether it is next to the
+    part's outline zone and inside the search box -> (centre (2,), direction (2,), normal (2,), first, last,
+    half width) of the rod's strip in image coordinates, or None when the blob is no rod crossing the box."""
+    points = np.stack([xs, ys], axis=1)
+    centre = points.mean(axis=0)
+    _, vectors = np.linalg.eigh(np.cov((points - centre).T))
+    direction, normal = vectors[:, 1], vectors[:, 0]
+    along = (points - centre) @ direction
+    across = (points - centre) @ normal
+    bins = np.floor(along - along.min()).astype(np.int64)
+    n = int(bins.max()) + 1
+    order = np.argsort(bins, kind="stable")
+    present, starts = np.unique(bins[order], return_index=True)
+    low = np.full(n, np.inf)
+    high = np.full(n, -np.inf)
+    low[present] = np.minimum.reduceat(across[order], starts)
+    high[present] = np.maximum.reduceat(across[order], starts)
+    width = high - low + 1.0
+    filled = np.isfinite(low)
+    thickness = float(np.median(width[filled]))
+    if n < ROD_MIN_ELONGATION * thickness:
+        return None
+    trim = int(np.ceil(0.5 * thickness))
+    # (sections at the part are left out: the ring cut them, or the rod runs on behind the part there)
+    inner = filled & ~(np.bincount(bins, weights=at_part.astype(np.float64), minlength=n) > 0)
+    inner[:trim] = inner[n - trim:] = False
+    if inner.sum() < 1.5 * thickness:
+        return None
+    positions = np.flatnonzero(inner).astype(np.float64)
+    middle = 0.5 * (low[inner] + high[inner])
+    slope, offset = np.polyfit(positions, middle, 1)
+    straight = np.abs(middle - (slope * positions + offset)) <= max(1.5, 0.25 * thickness)
+    even = (width[inner] >= 0.6 * thickness) & (width[inner] <= 1.6 * thickness)
+    if (straight & even).mean() < ROD_REGULAR_SHARE:
+        return None
+    # the ends (a thickness long): beyond the box, or at the part (it runs on behind it)
+    ends = []
+    for selected in (bins < trim, bins >= n - trim):
+        if in_box[selected].mean() <= 0.5:
+            ends.append("beyond")
+        elif at_part[selected].any():
+            ends.append("part")
+        else:
+            return None
+    if ends != ["beyond", "beyond"] and ("beyond" not in ends or not part_in_place):
+        return None
+    # the strip: the fitted line (straighten the axis by the fitted slope), as wide as the regular sections
+    tilt = np.arctan(slope)
+    direction, normal = (np.cos(tilt) * direction + np.sin(tilt) * normal,
+                         -np.sin(tilt) * direction + np.cos(tilt) * normal)
+    # a point on the fitted line: bin 0 (along = its minimum), across = the fitted offset, in the old axes
+    origin = centre + along.min() * vectors[:, 1] + offset * vectors[:, 0]
+    pixel_along = (points - origin) @ direction
+    pixel_across = (points - origin) @ normal
+    regular = np.zeros(n, bool)
+    regular[np.flatnonzero(inner)[straight & even]] = True
+    half_width = float(np.percentile(np.abs(pixel_across[regular[bins]]), 98)) + 1.0
+    return origin, direction, normal, float(pixel_along.min()), float(pixel_along.max()), half_width

@@ -42,7 +42,8 @@ from .layer_shift import BandShift, band_shift
 from .tangle import NewMaterial, new_material
 from .shadows import shade_of_clipped_bed, shadow_left
 from .masks import (around, bounding_box, dilate, disk, erode, outline_zone,  # noqa: F401  (re-exported)
-                    reaching_in_from_above, shift_mask)
+                    reaching_in_from_above, shift_mask, crossing_the_box, ROD_BEHIND_PART_MAX_MISSING,
+                    ROD_BEHIND_PART_MIN_SEEN)
 
 #: Shadows keep at least this fraction of the bed's brightness; darker than that is material anywhere.
 SHADOW_MIN_RATIO = 0.35
@@ -617,8 +618,9 @@ def compare_masks(
     missing = expected, farther than ``tolerance`` inside its outline, and confidently bed now
     (an uncertain pixel is given the benefit of the doubt: no pause on missing evidence).
     extra = observed material farther than ``tolerance`` outside the outline, inside ``search``
-    (blobs reaching 15 % or more beyond it, from above, are something else: the hotend, the gantry),
-    in blobs thicker than ~4 px that do not lie (80 % or more) inside ``dont_care``.
+    (blobs reaching 15 % or more beyond it, from above, are something else: the hotend, the gantry; so
+    are rods crossing it from the side, masks.crossing_the_box), in blobs thicker than ~4 px that do not
+    lie (80 % or more) inside ``dont_care``.
     The band figures count missing pixels inside the newest band and extra pixels within
     ``band_reach`` of it. ``top_tolerance`` (px) widens the tolerance upwards only (the vertical
     alignment is the least certain); ``linked`` ((h, w) bool, everything not confidently bed) groups
@@ -630,6 +632,7 @@ def compare_masks(
     missing = cv2.morphologyEx(missing.astype(np.uint8), cv2.MORPH_OPEN, _KERNEL3).astype(bool)
     grown = outline_zone(expected, tolerance, top_tolerance)
     outside = observed & ~grown
+    objects = None
     if outside.any():
         # Something reaching in from outside the search box (the parked hotend, the gantry, a hand) is not
         # the print's. Objects are grouped on everything not confidently bed (``linked``): the parked
@@ -641,6 +644,16 @@ def compare_masks(
     # close first so a tangle of thin strands becomes one blob, then drop what is still thinner
     # than ~5 px (strings, a skirt line softened by JPEG)
     extra = cv2.morphologyEx(cv2.morphologyEx(extra, cv2.MORPH_CLOSE, _KERNEL3), cv2.MORPH_OPEN, _KERNEL5)
+    if (objects is not None and extra.any() and np.count_nonzero(outside & search) >= 30
+            and (extra.astype(bool) & search & ~erode(search, 2)).any()):
+        # ... nor is a rod crossing the box from the side (the X rods, their reflection in glass); one that
+        # ends behind the part only while the part stands where it belongs (core/masks.py). (Looked for
+        # only when extra material reaches the box's edge, as a rod's does: most checks have none.)
+        in_place = (int(missing.sum()) <= ROD_BEHIND_PART_MAX_MISSING * max(int(expected.sum()), 1)
+                    and np.count_nonzero(observed & core) >= ROD_BEHIND_PART_MIN_SEEN * np.count_nonzero(core))
+        outside &= ~crossing_the_box(objects, search, grown, part_in_place=in_place)
+        extra = cv2.morphologyEx(cv2.morphologyEx((outside & search).astype(np.uint8), cv2.MORPH_CLOSE, _KERNEL3),
+                                 cv2.MORPH_OPEN, _KERNEL5)
     extra = extra.astype(bool) & ~grown
     if extra.any():
         # specks far smaller than the part are noise, not a failure (a real blob is a sizeable share)
