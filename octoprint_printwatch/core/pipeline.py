@@ -398,7 +398,9 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     * while the part visibly grows (median growth >= 50 %), a camera failing on missing material
       alone does not count (a face the colour of what lies behind it looks missing); nor does missing
       material alone from no more than half of the usable cameras unless the part stalled, nor from a
-      camera's first look at the part (``ShapeResult.first_look``: the growth test needs a second one);
+      camera's first look at the part (``ShapeResult.first_look``: the growth test needs a second one), nor
+      where, as a group, it is not the background (``ShapeResult.background_missing_pct``: a face of nearly
+      the bed's colour);
     * or when the part stopped growing (corroborated by missing material in at least one view:
       25 % of the newest band, or half the threshold overall, in a view that saw no rise): the median over
       cameras of the observed rise of the part's upper outline since the previous check (readings below
@@ -464,6 +466,13 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     # less than the model says: one frame shows both as missing material. The next check can (the growth
     # test), so there missing material alone waits for it.
     waiting = {r.camera for r in missing_only if r.first_look}
+    # Nor does missing material that, as a group, is not the background: a face of nearly its colour (filament
+    # in the bed's colour) passes for it pixel by pixel, but not as a group (``background_missing_pct``)
+    waiting |= {r.camera for r in missing_only if r.background_missing_pct is not None
+                and r.background_missing_pct + r.extra_pct <= r.threshold
+                and (r.band_error_pct is None or r.background_band_missing_pct is None
+                     or r.background_band_missing_pct + (r.band_error_pct - (r.band_missing_pct or 0.0))
+                     <= r.band_threshold)}
     failing = [r for r in failing if r.camera not in waiting]
     missing_only = [r for r in missing_only if r.camera not in waiting]
     if missing_only and not stalled and 2 * len(missing_only) <= len(usable):

@@ -154,6 +154,11 @@ class ShapeResult:
     shift_candidates: np.ndarray | None = field(default=None, repr=False)
     best_candidate: tuple[int, int] | None = None
     palette: np.ndarray | None = field(default=None, repr=False)         # (k, 3) the part's colours seen now
+    #: of the missing material, what shows the background itself (% of expected; % of the newest band): the
+    #: rest passes for the background pixel by pixel but not as a group, a face of nearly its colour
+    #: (:func:`differs_as_a_group`); measured only when the camera fails on missing material alone, else None
+    background_missing_pct: float | None = None
+    background_band_missing_pct: float | None = None
     # pieces the overlay is drawn from (kept so the picture costs nothing unless asked for)
     _frame: np.ndarray | None = field(default=None, repr=False)
     _expected: np.ndarray | None = field(default=None, repr=False)
@@ -347,6 +352,54 @@ def detectable_fraction(palette: np.ndarray, background: np.ndarray, noise: dict
     z = np.maximum(np.maximum(chroma / noise["chroma"], np.maximum(luma_p - luma_b, 0) / noise["bright"]),
                    np.maximum(luma_b - luma_p, 0) / noise["dark"])
     return (z > material_factor).mean(axis=1)
+
+
+def differs_as_a_group(frame: np.ndarray, background: np.ndarray, group: np.ndarray, bed_sample: np.ndarray,
+                       factor: float, where: np.ndarray | None = None, radius: int = 4) -> np.ndarray:
+    """(h, w) bool: pixels of ``where`` (default everywhere) whose neighbourhood (the ``group`` pixels
+    within ``radius``), averaged, differs from the background more than a patch of certain bed
+    (``bed_sample``) does.
+
+    ``frame`` (h, w, 3) uint8 and ``background`` (h, w, 3) float32 (exposure-normalised). A face of nearly
+    the bed's colour (filament in the bed's colour, a top face lit like the bed) passes the per-pixel test
+    for "bed" in most pixels, but it is off by the same amount in all of them, while the bed showing
+    through is off only by noise: averaging over a patch divides the noise, not the offset. Patches of the
+    bed sample give the scale (lighting gradients, grain, JPEG), so the test is in units of this camera's
+    patch noise, like every other cue: beyond ``factor`` times the 90th percentile of the bed patches'
+    offsets, in luma or in either chromaticity channel.
+    """
+    h, w = group.shape
+    out = np.zeros((h, w), bool)
+    box = bounding_box(group if where is None else where, pad=radius)
+    if box is None:
+        return out
+    luma_f, c1_f, c2_f = _luma_chroma(frame.astype(np.float32))
+    luma_b, c1_b, c2_b = _luma_chroma(background)
+    scale = (luma_f + 6.0) * 0.01
+    diff = np.dstack([luma_f - luma_b, (c1_f - c1_b) * scale, (c2_f - c2_b) * scale])   # (h, w, 3)
+    # the bed's patch offsets: means over (2 radius + 1)-px blocks lying on certain bed
+    side = 2 * radius + 1
+    bh, bw = h // side, w // side
+    if bh < 1 or bw < 1:
+        return out
+    bed = bed_sample[: bh * side, : bw * side].astype(np.float32)
+    bed_share = cv2.resize(bed, (bw, bh), interpolation=cv2.INTER_AREA)
+    bed_sum = cv2.resize(diff[: bh * side, : bw * side] * bed[..., None], (bw, bh), interpolation=cv2.INTER_AREA)
+    whole = bed_share > 0.9
+    if int(whole.sum()) < 12:
+        return out
+    patches = bed_sum[whole] / bed_share[whole][:, None]                                  # (n, 3)
+    centre = np.median(patches, axis=0)
+    spread = np.maximum(np.percentile(np.abs(patches - centre), 90, axis=0), 0.25)
+    # the group's own mean around each pixel (normalised convolution: material next to a face must not
+    # make the face look different)
+    y0, y1, x0, x1 = box
+    g = group[y0:y1, x0:x1].astype(np.float32)
+    weight = cv2.blur(g, (side, side))
+    mean = cv2.blur(diff[y0:y1, x0:x1] * g[..., None], (side, side)) / np.maximum(weight, 1e-3)[..., None]
+    off = (np.abs(mean - centre) > factor * spread).any(axis=2) & (weight > 0.25)
+    out[y0:y1, x0:x1] = off
+    return out if where is None else out & where
 
 
 def clean_mask(material: np.ndarray, fill_like: np.ndarray | None = None) -> np.ndarray:
@@ -892,6 +945,19 @@ def check_shape(
             reasons.append(f"{camera}: the newest layers are {band_error:.0f}% {what} "
                            f"(limit {band_threshold:g}%)")
 
+    # Of what is missing, how much shows the background itself: a face of nearly the background's colour
+    # (filament in the bed's colour, a top face lit like the bed) passes for it pixel by pixel, but is off
+    # by the same amount in all its pixels. pipeline.decide weighs a failure on missing material alone by
+    # this figure, so it is measured only for one (a few ms, on about one camera-check in ten).
+    background_missing_pct = background_band_missing_pct = None
+    if usable and not passed and missing_pct > 0 and extra_pct * 2.0 <= missing_pct:
+        background = comparison.missing & ~differs_as_a_group(
+            frame[crop], evidence.background_norm, core & evidence.bed & ~observed, bed_sample, bed_factor,
+            where=comparison.missing)
+        background_missing_pct = 100.0 * int(background.sum()) / n
+        if comparison.band_pixels:
+            background_band_missing_pct = 100.0 * int(np.count_nonzero(background & band_a)) / comparison.band_pixels
+
     observed_full = np.zeros((h, w), bool)
     observed_full[crop] = observed
     result = ShapeResult(
@@ -903,6 +969,7 @@ def check_shape(
         reasons=reasons, changed_bed_fraction=changed, observed_mask=observed_full, palette=palette_now,
         decisive=decisive, shift_candidates=shift_candidates, best_candidate=best_candidate,
         new_outside=new_outside, moved_px=moved_px, first_look=last_observed is None,
+        background_missing_pct=background_missing_pct, background_band_missing_pct=background_band_missing_pct,
     )
     if keep_pictures:
         full = np.zeros((h, w), bool)
