@@ -76,6 +76,11 @@ KNOWN = [
     Bench("render", "bench_render.py", [], ["--quick"], False, "Preparation: G-code solids and expected views"),
     Bench("simulator", "bench_simulator.py", [], ["--repeat", "1"], False, "Print simulator speed"),
     Bench("calibration", "calibration_accuracy.py", [], [], False, "Calibration accuracy"),
+    # a second, independent simulator (docs/crosscheck.md); recordings are generated once and reused
+    Bench("crosscheck", "bench_crosscheck.py",
+          ["--out", "/tmp/printwatch-crosscheck-seed1", "--count", "60", "--seed", "1", "--jobs", "2"],
+          ["--out", "/tmp/printwatch-crosscheck-quick", "--count", "10", "--seed", "1", "--jobs", "2"], False,
+          "Second simulator (cross-check)"),
 ]
 
 
