@@ -252,3 +252,63 @@ def _rod_line(xs: np.ndarray, ys: np.ndarray, at_part: np.ndarray, in_box: np.nd
     regular[np.flatnonzero(inner)[straight & even]] = True
     half_width = float(np.percentile(np.abs(pixel_across[regular[bins]]), 98)) + 1.0
     return origin, direction, normal, float(pixel_along.min()), float(pixel_along.max()), half_width
+
+
+#: A blob is the mirror image of something above the search box when, at the best distance tried, this
+#: share of its mirrored pixels (those in the frame and above the box) lands on something that is not in
+#: the background frame.
+MIRROR_MATCH_SHARE = 0.7
+#: ... and at least this share of its pixels mirror into the frame, outside the search box.
+MIRROR_MIN_SEEN = 0.5
+
+
+def mirror_match(pixels: np.ndarray, camera, changed_at, search: np.ndarray, min_height: float = 0.0,
+                 distances: int = 48, sample: int = 400) -> float:
+    """Share of a blob's mirror image that lands on something new above the ``search`` box, at the best
+    distance from the camera (or the first at or above MIRROR_MATCH_SHARE): high when the blob is the
+    reflection, in a glossy bed, of an object hanging above it (the parked hotend). 0.0 when it cannot be one.
+
+    ``pixels`` (n, 2) x, y of the blob in the image of ``camera`` (a core.camera.Camera: ``rays``,
+    ``project``); ``changed_at(xs, ys)`` -> (m,) bool, whether the frame differs from the background
+    frame at those integer pixels; ``search`` (h, w) bool, the part's search box (the object itself is
+    never in front of the part). A mirror image in the bed plane z = 0 shows the point (x, y, -z) of an
+    object point (x, y, z): each pixel's ray is followed below the bed to a vertical plane facing the
+    camera at a trial distance, the point found there is mirrored up and projected; distances from where
+    the rays meet the bed out to five times that are tried. The object hangs at ``min_height`` mm or
+    higher (the nozzle is never below the part's top): a distance that puts the blob's nearest points
+    (5th percentile) less deep below the bed is not tried. Material standing on the bed (a part, a tangle)
+    mirrors onto whatever lies above it in the image, which rarely is new and of its mirrored shape; right
+    at the foot of the hanging object it would, but its mirror image there starts at the bed (depth 0).
+    """
+    points = np.asarray(pixels, np.float64).reshape(-1, 2)
+    if len(points) == 0:
+        return 0.0
+    if len(points) > sample:
+        points = points[np.linspace(0, len(points) - 1, sample).astype(int)]
+    origin, directions = camera.rays(points)
+    if origin[2] <= 0 or not (directions[:, 2] < 0).all():
+        return 0.0   # a ray that never meets the bed sees no reflection in it
+    to_bed = -origin[2] / directions[:, 2]
+    heading = directions[:, :2].mean(axis=0)
+    heading /= max(float(np.linalg.norm(heading)), 1e-9)
+    across = directions[:, :2] @ heading
+    if not (across > 1e-6).all():
+        return 0.0
+    bed_distance = float(np.median(to_bed * across))
+    h, w = search.shape
+    best = 0.0
+    for distance in bed_distance * np.geomspace(1.0, 5.0, distances):
+        at = origin + directions * (distance / across)[:, None]
+        below = at[:, 2] < 0   # only a point below the bed can be a mirror image
+        if below.mean() < MIRROR_MIN_SEEN or np.percentile(-at[below, 2], 5) < min_height:
+            continue
+        mirrored = at[below] * np.array([1.0, 1.0, -1.0])
+        image = np.round(camera.project(mirrored)).astype(np.int64)
+        inside = (image[:, 0] >= 0) & (image[:, 0] < w) & (image[:, 1] >= 0) & (image[:, 1] < h)
+        inside[inside] = ~search[image[inside, 1], image[inside, 0]]
+        if inside.sum() < MIRROR_MIN_SEEN * len(points):
+            continue
+        best = max(best, float(np.mean(changed_at(image[inside, 0], image[inside, 1]))))
+        if best >= MIRROR_MATCH_SHARE:
+            break   # (enough to tell: the farther distances cost as much again)
+    return best

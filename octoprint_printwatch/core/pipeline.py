@@ -144,7 +144,8 @@ class JobPlan:
         return ExpectedRegions(silhouette=silhouette, new_band=band, search=search, dont_care=dont_care,
                                max_shift_px=self.max_shift_px[camera], tolerance_px=self.tolerance_px[camera],
                                px_per_mm=self.px_per_mm.get(camera, 0.0), previous_silhouette=before,
-                               reflection=reflection, bed_to_image=bed_to_image)
+                               reflection=reflection, bed_to_image=bed_to_image, camera=cam,
+                               height_mm=float(z))
 
 
 def _zkey(z: float) -> float:

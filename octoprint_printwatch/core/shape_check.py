@@ -42,8 +42,8 @@ from .layer_shift import BandShift, band_shift
 from .tangle import NewMaterial, new_material
 from .shadows import shade_of_clipped_bed, shadow_left
 from .masks import (around, bounding_box, dilate, disk, erode, outline_zone,  # noqa: F401  (re-exported)
-                    reaching_in_from_above, shift_mask, crossing_the_box, ROD_BEHIND_PART_MAX_MISSING,
-                    ROD_BEHIND_PART_MIN_SEEN)
+                    reaching_in_from_above, shift_mask, crossing_the_box, mirror_match, MIRROR_MATCH_SHARE,
+                    ROD_BEHIND_PART_MAX_MISSING, ROD_BEHIND_PART_MIN_SEEN)
 
 #: Shadows keep at least this fraction of the bed's brightness; darker than that is material anywhere.
 SHADOW_MIN_RATIO = 0.35
@@ -92,6 +92,8 @@ class ExpectedRegions:
     flat_max_px: float = 1e9   # thickest blob (px) that can still be a flat mark on the bed
     reflection: np.ndarray | None = None   # where the part's mirror image in a glossy bed can appear
     bed_to_image: np.ndarray | None = None   # (2, 2) image px per printer X/Y mm at the part (layer-shift test)
+    camera: Any = None   # the calibrated core.camera.Camera of this image (reflections of things above), or None
+    height_mm: float = 0.0   # the check height: the nozzle, and what hangs with it, is never lower
 
 
 @dataclass
@@ -748,6 +750,36 @@ def compare_masks(
     )
 
 
+def mirrored_from_above(extra: np.ndarray, expected: np.ndarray, tolerance: float, regions: ExpectedRegions,
+                        origin: tuple[int, int], frame: np.ndarray, background: np.ndarray, evidence: Evidence,
+                        material_factor: float) -> np.ndarray:
+    """(h, w) bool on the crop of ``extra``: its blobs that are the reflection, in a glossy bed, of
+    something hanging above the search box (the parked hotend: masks.mirror_match), with the full-size
+    ``frame``/``background`` (H, W, 3) and the crop's top-left ``origin`` (y0, x0). A blob touching the
+    part's outline (spaghetti, a blob at the nozzle) is never one."""
+    out = np.zeros(extra.shape, bool)
+    count, labels = cv2.connectedComponents(extra.astype(np.uint8), connectivity=8)
+    at_part = dilate(expected, tolerance + 3)
+    touching = np.bincount(labels[at_part], minlength=count) > 0
+    gains = np.asarray(evidence.gains, np.float32)
+    # changed: any channel off by more than the material threshold in this camera's noise units
+    limit = material_factor * max(evidence.noise.get("bright", 1.0), evidence.noise.get("dark", 1.0))
+
+    def changed_at(xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+        difference = np.abs(frame[ys, xs].astype(np.float32) - background[ys, xs].astype(np.float32) * gains)
+        return difference.max(axis=1) > limit
+
+    search = regions.search.astype(bool)
+    for index in range(1, count):
+        if touching[index]:
+            continue
+        ys, xs = np.nonzero(labels == index)
+        pixels = np.stack([xs + origin[1], ys + origin[0]], axis=1)
+        if mirror_match(pixels, regions.camera, changed_at, search, regions.height_mm) >= MIRROR_MATCH_SHARE:
+            out[labels == index] = True
+    return out
+
+
 # ------------------------------------------------------------- the whole check
 def check_shape(
     camera: str,
@@ -865,6 +897,9 @@ def check_shape(
                                dont_care_a, tol, band_reach=max(2 * tol, shift_bound),
                                flat_max_px=regions.flat_max_px, reflection=reflection_a,
                                top_tolerance=tol, linked=~evidence.bed)
+    if regions.camera is not None and comparison.extra.any():
+        comparison.extra &= ~mirrored_from_above(comparison.extra, expected_a, tol, regions, (y0, x0),
+                                                 frame, background, evidence, material_factor)
 
     # Growth since the previous check: the same camera, the same processing, so calibration and
     # alignment errors cancel; a part that stopped growing (runout, clog, spaghetti) shows none of the

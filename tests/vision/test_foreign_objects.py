@@ -11,7 +11,7 @@ import cv2
 import numpy as np
 import pytest
 
-from octoprint_printwatch.core.masks import crossing_the_box, outline_zone
+from octoprint_printwatch.core.masks import MIRROR_MATCH_SHARE, crossing_the_box, outline_zone
 from octoprint_printwatch.core.shape_check import check_shape
 
 from .synthetic import PART, Box, H, W, bed_texture, camera_effects, paint_part, regions
@@ -111,3 +111,83 @@ def test_crossing_the_box_returns_the_rods_strip_and_nothing_else():
     left[:, PART.x0:] = False
     assert crossing_the_box(left, search, outline, part_in_place=True)[left].mean() > 0.95
     assert not crossing_the_box(left, search, outline, part_in_place=False).any()
+
+
+# ------------------------------------------------ the mirror image of the parked hotend in a glass bed
+# A calibrated camera looks at a part's search box (60-140 mm square, 40 mm high); the parked hotend
+# hangs behind it and to the side, above the box. Its reflection in the bed is the hotend mirrored about
+# z = 0; the image of a box is the convex hull of its corners' images (a box is convex).
+
+def _camera():
+    from octoprint_printwatch.core.camera import Camera
+    return Camera.look_at("cam", (100.0, -250.0, 200.0), (100.0, 100.0, 10.0), width=640, height=480,
+                          hfov_deg=55.0)
+
+
+def _box_image(camera, x, y, z):
+    """(480, 640) bool: the image of the box x0-x1, y0-y1, z0-z1 (mm)."""
+    corners = np.array([[cx, cy, cz] for cx in x for cy in y for cz in z], np.float64)
+    hull = cv2.convexHull(np.round(camera.project(corners)).astype(np.int32))
+    out = np.zeros((480, 640), np.uint8)
+    cv2.fillConvexPoly(out, hull, 1)
+    return out.astype(bool)
+
+
+HOTEND = dict(x=(150.0, 175.0), y=(170.0, 190.0), z=(60.0, 110.0))
+
+
+#: the check height: the part is printed up to here, the hotend hangs higher
+PRINTED_MM = 30.0
+
+
+def _mirror_share(blob, changed, search):
+    from octoprint_printwatch.core.masks import mirror_match
+    ys, xs = np.nonzero(blob)
+    return mirror_match(np.stack([xs, ys], axis=1), _camera(), lambda qx, qy: changed[qy, qx], search,
+                        min_height=PRINTED_MM)
+
+
+def _scene():
+    camera = _camera()
+    search = _box_image(camera, (60.0, 140.0), (60.0, 140.0), (0.0, 40.0))
+    hotend = _box_image(camera, **HOTEND)
+    reflection = _box_image(camera, HOTEND["x"], HOTEND["y"], (-HOTEND["z"][1], -HOTEND["z"][0]))
+    return camera, search, hotend, reflection
+
+
+def test_the_parked_hotends_reflection_is_matched_to_the_hotend_above_it():
+    _, search, hotend, reflection = _scene()
+    assert hotend.sum() > 300 and reflection.sum() > 300
+    assert not (hotend & search).any()           # the hotend hangs above the box, outside it
+    assert _mirror_share(reflection, hotend, search) >= MIRROR_MATCH_SHARE
+
+
+def test_a_part_standing_on_the_bed_below_the_hotend_is_no_reflection():
+    camera, search, hotend, _ = _scene()
+    # a piece of the part (knocked off, as wide as the hotend) standing on the bed in front of the hotend
+    standing = _box_image(camera, HOTEND["x"], (100.0, 120.0), (0.0, 25.0))
+    assert standing.sum() > 300
+    assert _mirror_share(standing, hotend, search) < MIRROR_MATCH_SHARE
+
+
+def test_a_reflection_deeper_than_the_nozzle_can_hang_is_not_matched():
+    _, search, hotend, reflection = _scene()
+    from octoprint_printwatch.core.masks import mirror_match
+    ys, xs = np.nonzero(reflection)
+    # printed higher than the hotend hangs: whatever this blob mirrors, the nozzle cannot be there
+    share = mirror_match(np.stack([xs, ys], axis=1), _camera(), lambda qx, qy: hotend[qy, qx], search,
+                         min_height=HOTEND["z"][1] + 20.0)
+    assert share < MIRROR_MATCH_SHARE
+
+
+def test_no_reflection_without_something_new_above_the_box():
+    _, search, _, reflection = _scene()
+    nothing = np.zeros_like(reflection)
+    assert _mirror_share(reflection, nothing, search) == 0.0
+
+
+def test_the_reflection_of_an_object_elsewhere_is_not_matched():
+    camera, search, _, reflection = _scene()
+    # the only new thing above the box hangs 60 mm to the left: nothing mirrors onto this blob
+    elsewhere = _box_image(camera, (60.0, 85.0), HOTEND["y"], HOTEND["z"])
+    assert _mirror_share(reflection, elsewhere, search) < 0.5
