@@ -405,7 +405,10 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     * or when the part stopped growing (corroborated by missing material in at least one view:
       25 % of the newest band, or half the threshold overall, in a view that saw no rise): the median over
       cameras of the observed rise of the part's upper outline since the previous check (readings below
-      -15 %, a sunk outline, left out) is below ``min_growth_pct`` of the expected rise,
+      -15 %, a sunk outline, left out) is below ``min_growth_pct`` of the expected rise; or, unless a
+      top surface closes, when two or more cameras measured growth, its median is under 50 % and two views
+      that saw under 50 % each miss 15 % of the newest band (strands piling on a stopped part lift the
+      outline a little but fill no band),
       or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
       abstains reports no ``error_pct`` and never fails);
     * or when the cameras together confirm that the newest layers sit sideways on the older ones
@@ -444,6 +447,13 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
                          or (not top_closing and r.missing_pct >= r.threshold / 2.0))
                     for r in measured.values())
     stalled = bool(growth) and float(np.median(growth)) < settings.min_growth_pct and band_gone
+    # A part rising at under half the expected rate while two views that see it slow each miss part of its
+    # newest band has slowed, not been misread: strands piling on a stopped part lift the outline a little
+    # but fill no band; a face the colour of the bed reads missing but its outline rises fully.
+    slowed_views = [r for r in measured.values()
+                    if r.growth_pct < 50.0 and (r.band_missing_pct or 0.0) >= 15.0]
+    stalled = stalled or (not top_closing and len(growth) >= 2 and float(np.median(growth)) < 50.0
+                          and len(slowed_views) >= 2)
     size_fail, size_usable = [], 0
     for key, entry in size.items():
         error = entry.get("error_pct") if isinstance(entry, Mapping) else None
