@@ -33,11 +33,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from typing import Any, Mapping
+from typing import Any, Callable, Mapping
 
 import cv2
 import numpy as np
 
+from .camera import Camera
 from .layer_shift import BandShift, band_shift
 from .tangle import NewMaterial, new_material
 from .shadows import shade_of_clipped_bed, shadow_left
@@ -92,7 +93,7 @@ class ExpectedRegions:
     flat_max_px: float = 1e9   # thickest blob (px) that can still be a flat mark on the bed
     reflection: np.ndarray | None = None   # where the part's mirror image in a glossy bed can appear
     bed_to_image: np.ndarray | None = None   # (2, 2) image px per printer X/Y mm at the part (layer-shift test)
-    camera: Any = None   # the calibrated core.camera.Camera of this image (reflections of things above), or None
+    camera: Camera | None = None   # the calibrated camera of this image (reflections of things above), or None
     height_mm: float = 0.0   # the check height: the nozzle, and what hangs with it, is never lower
 
 
@@ -667,6 +668,7 @@ def compare_masks(
     reflection: np.ndarray | None = None,
     top_tolerance: float = 0.0,
     linked: np.ndarray | None = None,
+    not_the_prints: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> Comparison:
     """Missing and extra material (see module docstring); all inputs (h, w) bool, already aligned.
 
@@ -680,7 +682,9 @@ def compare_masks(
     ``band_reach`` of it. ``top_tolerance`` (px) widens the tolerance upwards only (the vertical
     alignment is the least certain); ``linked`` ((h, w) bool, everything not confidently bed) groups
     extra pixels into objects for the "from above" test, and a blob reaching the part's lowest
-    quarter is never foreign (a tipped part stands on the bed).
+    quarter is never foreign (a tipped part stands on the bed). ``not_the_prints`` ((h, w) bool extra ->
+    (h, w) bool) marks blobs of the extra material that are something else, found with what the crop
+    cannot show; they are left out of every figure.
     """
     core = erode(expected, tolerance)
     missing = core & bed & ~observed
@@ -736,6 +740,10 @@ def compare_masks(
             flat |= (mirrored >= 0.8 * np.maximum(area, 1)) | (either >= 0.8 * np.maximum(area, 1))
         flat[0] = False
         extra &= ~flat[labels]
+    if not_the_prints is not None and extra.any():
+        # blobs found to be something else with what this crop cannot show (check_shape: the mirror image
+        # of the parked hotend), dropped before any figure is counted
+        extra &= ~not_the_prints(extra)
     band_core = band & core
     near_band = dilate(band, band_reach) & ~grown
     return Comparison(
@@ -896,10 +904,10 @@ def check_shape(
     comparison = compare_masks(observed, bed_evidence, expected_a, band_a, search_a,
                                dont_care_a, tol, band_reach=max(2 * tol, shift_bound),
                                flat_max_px=regions.flat_max_px, reflection=reflection_a,
-                               top_tolerance=tol, linked=~evidence.bed)
-    if regions.camera is not None and comparison.extra.any():
-        comparison.extra &= ~mirrored_from_above(comparison.extra, expected_a, tol, regions, (y0, x0),
-                                                 frame, background, evidence, material_factor)
+                               top_tolerance=tol, linked=~evidence.bed,
+                               not_the_prints=None if regions.camera is None else
+                               lambda extra: mirrored_from_above(extra, expected_a, tol, regions, (y0, x0), frame,
+                                                                 background, evidence, material_factor))
 
     # Growth since the previous check: the same camera, the same processing, so calibration and
     # alignment errors cancel; a part that stopped growing (runout, clog, spaghetti) shows none of the
@@ -986,12 +994,12 @@ def check_shape(
     # this figure, so it is measured only for one (a few ms, on about one camera-check in ten).
     background_missing_pct = background_band_missing_pct = None
     if usable and not passed and missing_pct > 0 and extra_pct * 2.0 <= missing_pct:
-        background = comparison.missing & ~differs_as_a_group(
+        shows_bed = comparison.missing & ~differs_as_a_group(
             frame[crop], evidence.background_norm, core & evidence.bed & ~observed, bed_sample, bed_factor,
             where=comparison.missing)
-        background_missing_pct = 100.0 * int(background.sum()) / n
+        background_missing_pct = 100.0 * int(shows_bed.sum()) / n
         if comparison.band_pixels:
-            background_band_missing_pct = 100.0 * int(np.count_nonzero(background & band_a)) / comparison.band_pixels
+            background_band_missing_pct = 100.0 * int(np.count_nonzero(shows_bed & band_a)) / comparison.band_pixels
 
     observed_full = np.zeros((h, w), bool)
     observed_full[crop] = observed

@@ -191,3 +191,24 @@ def test_the_reflection_of_an_object_elsewhere_is_not_matched():
     # the only new thing above the box hangs 60 mm to the left: nothing mirrors onto this blob
     elsewhere = _box_image(camera, (60.0, 85.0), HOTEND["y"], HOTEND["z"])
     assert _mirror_share(reflection, elsewhere, search) < 0.5
+
+
+def test_blobs_found_to_be_something_else_count_in_no_figure():
+    """A blob the caller recognises with the whole frame (the hotend's mirror image) is left out of the
+    extra material and of the newest band's figures alike, so the band rule cannot fail on it either."""
+    from octoprint_printwatch.core.shape_check import compare_masks
+
+    expected = np.zeros((120, 160), bool)
+    expected[40:100, 60:100] = True
+    band = np.zeros_like(expected)
+    band[40:46, 60:100] = True
+    blob = np.zeros_like(expected)
+    blob[30:50, 102:118] = True                      # beside the newest band, outside the outline
+    observed = expected | blob
+    search = np.ones_like(expected)
+    args = (observed, ~observed, expected, band, search, np.zeros_like(expected), 2.0, 10.0)
+    counted = compare_masks(*args)
+    assert counted.extra.sum() > 200 and counted.band_extra > 0
+    dropped = compare_masks(*args, not_the_prints=lambda extra: extra & blob)
+    assert not dropped.extra.any() and dropped.band_extra == 0
+    assert dropped.missing.sum() == counted.missing.sum()
