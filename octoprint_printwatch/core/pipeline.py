@@ -163,9 +163,11 @@ def prepare_job(
     cache_dir: str | Path | None = None,
     part: Any = None,
 ) -> JobPlan:
-    """Build the job's plan: the expected part (from the model when given, else the G-code), the
-    expected views of every camera at every check height, and each camera's alignment bounds."""
-    from .geometry import part_from_gcode, part_from_mesh
+    """Build the job's plan: the expected part (``geometry.part_for_job``: the model when given, else the
+    G-code; with both, the G-code's solid when the model cannot be made a solid, which a broken mesh's
+    silhouettes would otherwise contradict), the expected views of every camera at every check height, and
+    each camera's alignment bounds."""
+    from .geometry import part_for_job
     from .render import iter_expected_views
 
     settings = settings or DetectionSettings()
@@ -174,12 +176,9 @@ def prepare_job(
         raise PrintWatchError("no cameras: the checks need at least one calibrated camera")
     notes: list[str] = []
     if part is None:
-        if model_path is not None:
-            part = part_from_mesh(model_path)
-        elif gcode_path is not None:
-            part = part_from_gcode(gcode_path)
-        else:
+        if model_path is None and gcode_path is None:
             raise PrintWatchError("neither a model nor a G-code file: the expected part is unknown")
+        part = part_for_job(model_path, gcode_path)
     notes.extend(getattr(part, "notes", []) or [])
     cameras = {name: working_camera(cam, settings.working_width) for name, cam in cameras.items()}
     heights = sorted({(int(layer), float(z)) for layer, z in (check_heights or [])}, key=lambda lz: lz[1])
@@ -745,7 +744,8 @@ def evaluate_recording(recording, settings: DetectionSettings | None = None, *, 
     returned too, under the key ``"_results"`` (not JSON; for benchmarks and tests).
     """
     settings = settings or DetectionSettings()
-    checks = sorted(recording.checks, key=lambda c: c.z)
+    # a writer may list checks in any order; they ran bottom up (same height: by layer)
+    checks = sorted(recording.checks, key=lambda c: (c.z, c.layer))
     plan = prepare_job(gcode_path=recording.gcode, model_path=recording.model, cameras=recording.cameras,
                        pairs=recording.pairs, check_heights=[(c.layer, c.z) for c in checks],
                        settings=settings, cache_dir=cache_dir)
@@ -762,14 +762,17 @@ def evaluate_recording(recording, settings: DetectionSettings | None = None, *, 
         results.append(result)
         if out_dir:
             for name, shape in result.shape.items():
-                cv2.imwrite(str(out_dir / f"{index:03d}_{name}.jpg"), shape.overlay)
+                # a camera's name may hold a path separator ("usb/1"): one file per camera all the same
+                target = out_dir / f"{index:03d}_{name.replace('/', '_').replace(chr(92), '_')}.jpg"
+                if shape.overlay is not None and not cv2.imwrite(str(target), shape.overlay):
+                    raise PrintWatchError(f"{target}: cannot write the overlay picture")
     doc = {
         "session": session_label if session_label is not None else str(recording.root),
         "prepare_seconds": round(plan.prepare_seconds, 3),
         "checks": [r.to_json() for r in results],
         "first_failure_layer": first_failure_layer(results),
         "settings": settings.to_dict(),
-        "notes": plan.notes,
+        "notes": [*getattr(recording, "notes", []), *plan.notes],
     }
     if keep_results:
         doc["_results"] = results

@@ -53,6 +53,8 @@ class Recording:
     backgrounds: dict[str, Path]
     checks: list[CheckFrames]
     raw: dict = field(repr=False, default_factory=dict)
+    #: what the reader tolerated and a user may want to know (e.g. frames of a camera with no calibration)
+    notes: list[str] = field(default_factory=list)
 
     def read_background(self, camera: str) -> np.ndarray | None:
         """(h, w, 3) uint8 BGR background of ``camera``, or None when the recording has none."""
@@ -66,7 +68,11 @@ class Recording:
 
 
 def read_image(path: str | os.PathLike) -> np.ndarray:
-    """(h, w, 3) uint8 BGR image; :class:`RecordingError` naming the file when it cannot be decoded."""
+    """(h, w, 3) uint8 BGR image; :class:`RecordingError` naming the file when it cannot be decoded.
+
+    The format is told by the content, not the suffix. Grayscale frames come back as three equal
+    channels, an alpha channel is dropped and 16-bit PNGs are scaled to 8 bits (``IMREAD_COLOR``).
+    """
     path = Path(path)
     if not path.is_file():
         raise RecordingError(f"{path}: no such image file")
@@ -87,7 +93,8 @@ def load_recording(session_dir: str | os.PathLike) -> Recording:
     if not session_path.is_file():
         raise RecordingError(f"{session_path}: missing (a recording folder holds session.json)")
     try:
-        doc = json.loads(session_path.read_text(encoding="utf-8"))
+        # utf-8-sig: some Windows tools start UTF-8 text with a byte-order mark
+        doc = json.loads(session_path.read_text(encoding="utf-8-sig"))
     except UnicodeDecodeError:
         raise RecordingError(f"{session_path}: not UTF-8 text") from None
     except json.JSONDecodeError as exc:
@@ -99,6 +106,8 @@ def load_recording(session_dir: str | os.PathLike) -> Recording:
 
     def fail(message: str) -> RecordingError:
         return RecordingError(f"{session_path}: {message}")
+
+    notes: list[str] = []
 
     fmt = doc.get("format")
     if fmt != FORMAT:
@@ -134,10 +143,23 @@ def load_recording(session_dir: str | os.PathLike) -> Recording:
         raise fail("'cameras' must be a non-empty object {name: camera}")
     cameras: dict[str, Camera] = {}
     for name, data in raw_cameras.items():
+        if isinstance(data, dict) and "width" not in data and "height" not in data:
+            # K is in the pixels of the frames the camera gives: without a stated size, take theirs
+            size = _first_image_size(root, name, doc)
+            if size is not None:
+                data = dict(data, width=size[0], height=size[1])
+                notes.append(f"{session_path}: camera {name}: no width/height given: {size[0]}x{size[1]}, "
+                             f"the size of its frames, assumed")
         try:
             cameras[name] = Camera.from_dict(name, data)
         except CameraError as exc:
             raise fail(str(exc)) from None
+        cam = cameras[name]
+        cx, cy = cam.K[0, 2], cam.K[1, 2]
+        if not (0 <= cx <= cam.width and 0 <= cy <= cam.height):
+            # the frames' size alone then decides nothing: say which numbers disagree
+            notes.append(f"{session_path}: camera {name}: K's principal point ({cx:g}, {cy:g}) lies outside its "
+                         f"{cam.width}x{cam.height} image: were width/height and K calibrated at different sizes?")
 
     pairs: list[tuple[str, str]] = []
     raw_pairs = doc.get("pairs", [])
@@ -157,9 +179,13 @@ def load_recording(session_dir: str | os.PathLike) -> Recording:
     if not isinstance(raw_bg, dict):
         raise fail("'background' must be an object {camera: file}")
     backgrounds: dict[str, Path] = {}
+    uncalibrated: set[str] = set()
     for cam, rel in raw_bg.items():
         if cam not in cameras:
-            raise fail(f"background names unknown camera {cam!r}")
+            uncalibrated.add(cam)
+            continue
+        if rel is None:   # recorded as "no background"
+            continue
         backgrounds[cam] = _existing_image(root, rel, session_path, f"background of {cam}")
     for cam in cameras:  # the folder layout alone is enough when session.json omits the entry
         if cam not in backgrounds:
@@ -177,6 +203,8 @@ def load_recording(session_dir: str | os.PathLike) -> Recording:
         if not isinstance(entry, dict):
             raise fail(f"checks[{i}] must be an object")
         layer, z, frames = entry.get("layer"), entry.get("z"), entry.get("frames", {})
+        if isinstance(layer, float) and layer.is_integer():
+            layer = int(layer)   # 30.0 from a writer whose numbers are all doubles
         if isinstance(layer, bool) or not isinstance(layer, int) or layer < 1:
             raise fail(f"checks[{i}].layer must be an integer >= 1, got {layer!r}")
         if not _finite_number(z) or z < 0:
@@ -186,22 +214,73 @@ def load_recording(session_dir: str | os.PathLike) -> Recording:
         paths: dict[str, Path] = {}
         for cam, rel in frames.items():
             if cam not in cameras:
-                raise fail(f"checks[{i}].frames names unknown camera {cam!r}")
+                uncalibrated.add(cam)
+                continue
             if rel is None:  # explicitly recorded as "no frame" (dead camera)
                 continue
             paths[cam] = _existing_image(root, rel, session_path, f"checks[{i}] frame of {cam}")
         checks.append(CheckFrames(layer=layer, z=float(z), frames=paths))
+    if uncalibrated:
+        # the spec ignores unknown keys; frames with no calibration to compare them with are such keys
+        notes.append(f"{session_path}: frames of camera(s) not in 'cameras' ignored (no calibration): "
+                     f"{', '.join(sorted(map(repr, uncalibrated)))}")
 
     return Recording(root=root, cameras=cameras, pairs=pairs, model=model, gcode=gcode,
-                     layer_height=layer_height, backgrounds=backgrounds, checks=checks, raw=doc)
+                     layer_height=layer_height, backgrounds=backgrounds, checks=checks, raw=doc, notes=notes)
+
+
+def _first_image_size(root: Path, camera: str, doc: dict) -> tuple[int, int] | None:
+    """(width, height) of ``camera``'s background, else its first check frame, when one can be decoded."""
+    candidates = [(doc.get("background") or {}).get(camera) if isinstance(doc.get("background"), dict) else None]
+    for entry in doc.get("checks") or []:
+        if isinstance(entry, dict) and isinstance(entry.get("frames"), dict):
+            candidates.append(entry["frames"].get(camera))
+    for suffix in IMAGE_SUFFIXES:
+        candidates.append(f"background/{camera}{suffix}")
+    for rel in candidates:
+        if not isinstance(rel, str) or not rel:
+            continue
+        path = _locate(root, rel)
+        if (root == path or root in path.parents) and path.is_file():
+            try:
+                height, width = read_image(path).shape[:2]
+            except RecordingError:
+                continue   # named, with the file, when the checks read it
+            return width, height
+    return None
 
 
 def _finite_number(value: Any) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
 
-def _inside(root: Path, rel: str, session_path: Path, what: str) -> Path:
+def _locate(root: Path, rel: str) -> Path:
+    """The absolute path ``rel`` names in the recording folder (``\\`` separators from Windows writers too).
+
+    An absolute path that is not in the folder (written where the recording was made, then moved) names
+    the file at the longest tail of it that exists in the folder: ``/home/u/rec/checks/000/a.jpg`` is
+    ``checks/000/a.jpg`` of a folder moved elsewhere.
+    """
     path = (root / rel).resolve()
+    if "\\" in rel and not path.exists():
+        path = (root / rel.replace("\\", "/")).resolve()
+    if (path.exists() and (root == path or root in path.parents)) or not _is_absolute(rel):
+        return path
+    parts = [p for p in rel.replace("\\", "/").split("/") if p and p not in (".", "..")]
+    for start in range(len(parts)):
+        candidate = root.joinpath(*parts[start:])
+        if candidate.exists():
+            return candidate.resolve()
+    return path
+
+
+def _is_absolute(rel: str) -> bool:
+    """A POSIX absolute path or a Windows one (``C:\\...``, ``\\\\server\\...``)."""
+    return rel.startswith(("/", "\\")) or (len(rel) > 2 and rel[1] == ":" and rel[2] in "/\\")
+
+
+def _inside(root: Path, rel: str, session_path: Path, what: str) -> Path:
+    path = _locate(root, rel)
     if root != path and root not in path.parents:
         raise RecordingError(f"{session_path}: {what} {rel!r} points outside the recording folder")
     return path
@@ -213,8 +292,7 @@ def _existing_image(root: Path, rel: Any, session_path: Path, what: str) -> Path
     path = _inside(root, rel, session_path, what)
     if not path.is_file():
         raise RecordingError(f"{path}: missing ({what} in {SESSION_FILE})")
-    if path.suffix.lower() not in IMAGE_SUFFIXES:
-        raise RecordingError(f"{path}: {what} must be a .jpg or .png image")
+    # any suffix: read_image tells JPEG from PNG by the content and names the file it cannot decode
     return path
 
 
