@@ -537,6 +537,8 @@ class CheckRunner:
         self.palettes: dict[str, np.ndarray] = {}
         self.frozen: set[str] = set()
         self.last_observed: dict[str, np.ndarray] = {}
+        # the height each camera's last_observed was seen at (the growth test needs the previous check's)
+        self.last_observed_z: dict[str, float] = {}
         self.previous_z: float | None = None
         self.keep_pictures = True
         self.size_checks: dict = {}  # "left+right" -> stereo.PairSizeCheck, kept for the whole print
@@ -577,6 +579,9 @@ class CheckRunner:
                 max_changed_bed_fraction=settings.max_changed_bed_fraction,
                 layer_shift_mm=settings.layer_shift_mm,
                 last_observed=self.last_observed.get(name),
+                # a camera that could not see the part at the previous check (glare, a face in the bed's
+                # colour) has no mask of that height to measure the rise from: no growth reading
+                measure_growth=self.last_observed_z.get(name) == self.previous_z,
                 previous_mask=self.previous_masks.get(name),
                 anchor=self.anchors.get(name),
                 max_drift=1 if name in self.frozen else 2,
@@ -590,6 +595,7 @@ class CheckRunner:
             errors[name] = shape[name].error_pct if result.usable else None
             if result.usable:
                 self.last_observed[name] = result.observed_mask
+                self.last_observed_z[name] = z
             if result.palette is not None and result.usable and result.passed:
                 self.palettes[name] = result.palette
             if result.usable and result.passed and result.shift_candidates is not None \

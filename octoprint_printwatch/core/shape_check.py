@@ -343,6 +343,50 @@ def part_palette(frame: np.ndarray, mask: np.ndarray, groups: int = 5) -> np.nda
     return np.stack([chunk.mean(axis=0) for chunk in np.array_split(pixels[order], groups)])
 
 
+#: An extra blob whose pixels moved, on average, less than this share of the way from the bed towards the
+#: part's colours holds none of the part's material: the hotend's shadow, a lighting change. Measured on
+#: both simulators: 0.02-0.07 for head shadows; 0.28 or more for every detached part, shifted layer and
+#: spaghetti blob (a strand covering half a pixel reads about 0.5 there).
+PART_COLOUR_MIN_COVERAGE = 0.15
+
+
+def coverage_by_part(frame: np.ndarray, background: np.ndarray, palette: np.ndarray) -> np.ndarray:
+    """(n,) how far each pixel moved from the background towards the part's colour: 0 the background,
+    1 the part, about 0.5 where a strand covers half of it. ``frame`` and ``background`` (n, 3), ``palette``
+    (k, 3): per pixel, the palette colour whose linear mix ``background + c (colour - background)`` best
+    explains the frame (least residual) gives ``c``, clipped to [0, 1.5]. Where the part's colour is
+    the background's, any change reads as high coverage (no blob is ever dropped for it)."""
+    change = frame.astype(np.float32) - background.astype(np.float32)          # (n, 3)
+    best = np.zeros(len(change), np.float32)
+    best_residual = np.full(len(change), np.inf, np.float32)
+    for colour in np.asarray(palette, np.float32):
+        towards = colour[None, :] - background.astype(np.float32)                # (n, 3)
+        c = np.clip((change * towards).sum(axis=1) / np.maximum((towards * towards).sum(axis=1), 1.0), 0.0, 1.5)
+        residual = np.linalg.norm(change - c[:, None] * towards, axis=1)
+        better = residual < best_residual
+        best[better] = c[better]
+        best_residual[better] = residual[better]
+    return best
+
+
+def not_the_part_colour(extra: np.ndarray, frame: np.ndarray, background: np.ndarray,
+                        palette: np.ndarray) -> np.ndarray:
+    """(h, w) bool: the blobs of ``extra`` ((h, w) bool) whose mean :func:`coverage_by_part` is under
+    PART_COLOUR_MIN_COVERAGE, on ``frame`` (h, w, 3) and ``background`` (h, w, 3, at the frame's exposure)
+    with the part's ``palette`` (k, 3)."""
+    out = np.zeros(extra.shape, bool)
+    count, labels = cv2.connectedComponents(extra.astype(np.uint8), connectivity=8)
+    if count <= 1:
+        return out
+    inside = labels > 0
+    coverage = coverage_by_part(frame[inside], background[inside], palette)
+    which = labels[inside]
+    mean = np.bincount(which, weights=coverage, minlength=count) / np.maximum(np.bincount(which, minlength=count), 1)
+    faint = mean < PART_COLOUR_MIN_COVERAGE
+    faint[0] = False
+    return faint[labels]
+
+
 def detectable_fraction(palette: np.ndarray, background: np.ndarray, noise: dict,
                         material_factor: float) -> np.ndarray:
     """(n,) fraction of the palette's colours that background removal would tell apart from each of
@@ -804,6 +848,7 @@ def check_shape(
     layer_shift_mm: float = 1.5,
     previous_mask: np.ndarray | None = None,
     last_observed: np.ndarray | None = None,
+    measure_growth: bool = True,
     anchor: tuple[int, int] | None = None,
     max_drift: int = 2,
     palette: np.ndarray | None = None,
@@ -815,7 +860,8 @@ def check_shape(
 
     ``previous_mask``, ``anchor`` and ``palette`` carry what the previous checks of this camera
     learnt (its last passing material mask, its alignment shift, the part's colours);
-    ``last_observed`` is the material mask of the previous check, for the growth test.
+    ``last_observed`` is the camera's last material mask (the growth test reads it only with
+    ``measure_growth``: when it is the previous check's, whose expected silhouette it is compared with).
     ``layer_shift_mm`` is the smallest shift the layer-shift test looks for (its per-camera evidence,
     ``band_shift``, is pooled over the cameras by ``core.layer_shift.estimate_layer_shift``).
     """
@@ -901,19 +947,31 @@ def check_shape(
         fraction = detectable_fraction(palette_used, evidence.background_norm[candidates], evidence.noise,
                                        material_factor)
         bed_evidence[candidates] = fraction >= MISSING_DETECTABLE_SHARE
+    # material outside the part that is not of the part's colour (the hotend's shadow) is neither extra
+    # material nor new material (spaghetti); judged on the blobs each figure counts
+    def not_part_colour(blobs: np.ndarray) -> np.ndarray:
+        return (not_the_part_colour(blobs, frame[crop], evidence.background_norm, palette_used)
+                if palette_used is not None else np.zeros(blobs.shape, bool))
+
+    def not_the_prints(extra: np.ndarray) -> np.ndarray:
+        """Blobs of ``extra`` that are something else: not of the part's colour (a shadow), or the mirror
+        image of the parked hotend (which needs the calibrated camera)."""
+        out = not_part_colour(extra)
+        if regions.camera is not None and (extra & ~out).any():
+            out |= mirrored_from_above(extra & ~out, expected_a, tol, regions, (y0, x0), frame, background,
+                                       evidence, material_factor)
+        return out
+
     comparison = compare_masks(observed, bed_evidence, expected_a, band_a, search_a,
                                dont_care_a, tol, band_reach=max(2 * tol, shift_bound),
                                flat_max_px=regions.flat_max_px, reflection=reflection_a,
-                               top_tolerance=tol, linked=~evidence.bed,
-                               not_the_prints=None if regions.camera is None else
-                               lambda extra: mirrored_from_above(extra, expected_a, tol, regions, (y0, x0), frame,
-                                                                 background, evidence, material_factor))
+                               top_tolerance=tol, linked=~evidence.bed, not_the_prints=not_the_prints)
 
     # Growth since the previous check: the same camera, the same processing, so calibration and
     # alignment errors cancel; a part that stopped growing (runout, clog, spaghetti) shows none of the
     # new band, even where the band is a thin crescent the absolute comparison cannot resolve.
     growth_pct = None
-    if (last_observed is not None and last_observed.shape == (h, w)
+    if (measure_growth and last_observed is not None and last_observed.shape == (h, w)
             and regions.previous_silhouette is not None):
         before_a = shift_mask(regions.previous_silhouette[crop].astype(bool), dx, dy)
         # only material within the expected outlines counts: strings and the hotend above the part
@@ -952,8 +1010,10 @@ def check_shape(
     # part, attached to it; pipeline.decide weighs it over the cameras
     new_outside = None
     if last_observed is not None and last_observed.shape == (h, w):
+        shadows = not_part_colour(observed & ~grown_a & search_a)
         new_outside = new_material(observed, last_observed[crop], expected_a, search_a, tol, regions.px_per_mm,
-                                   ignore=reflection_a, marks=dont_care_a, linked=~evidence.bed)
+                                   ignore=shadows if reflection_a is None else reflection_a | shadows,
+                                   marks=dont_care_a, linked=~evidence.bed)
 
     reasons: list[str] = []
     decisive = False

@@ -160,3 +160,21 @@ def test_a_background_of_another_aspect_ratio_is_reported(cams):
     result = runner.run_check(layer, z, {n: frame(c, backgrounds[n], z, i) for i, (n, c) in enumerate(cams.items())})
     assert result.verdict == "ok" and "b" in result.unreadable
     assert any(reason.startswith("b: background frames are 320x180") for reason in result.reasons)
+
+
+def test_a_camera_back_after_a_missed_check_gives_no_growth_reading(cams):
+    # "b" gave no frame at the second check: at the third, its only mask is from the first check, while
+    # the expected rise is the second check's to the third; comparing the two read 187.5 % (and a stalled
+    # part as still growing), so no growth reading is made until it has a mask of the previous check
+    settings = DetectionSettings()
+    backgrounds = {n: bed(i) for i, n in enumerate(cams)}
+    runner = CheckRunner(make_plan(cams, settings), settings, backgrounds)
+    growth = []
+    for k, (layer, z) in enumerate(HEIGHTS):
+        frames = {n: None if (n == "b" and k == 1) else frame(c, backgrounds[n], z, 10 * k + i)
+                  for i, (n, c) in enumerate(cams.items())}
+        result = runner.run_check(layer, z, frames)
+        growth.append({n: r.growth_pct for n, r in result.shape.items()})
+        assert result.verdict == "ok"
+    assert "b" not in growth[1] and growth[2]["b"] is None
+    assert growth[3]["b"] == pytest.approx(100, abs=25)   # consecutive checks again

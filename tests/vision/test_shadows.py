@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
-from octoprint_printwatch.core.shape_check import _luma_chroma, check_shape, material_evidence
+from octoprint_printwatch.core.shape_check import _luma_chroma, check_shape, coverage_by_part, material_evidence
 
 from .synthetic import PART, Box, bed_texture, camera_effects, darken, paint_part, regions
 
@@ -105,3 +105,49 @@ def test_a_shadow_on_a_bed_with_a_saturated_channel_is_no_colour_change_but_a_re
                                     colour=(40, 40, 210), seed=6), noise=1.5)
     result_red = check_shape("cam", background, red, regions())
     assert not result_red.passed and result_red.extra_pct > 7
+
+
+def tinted_shadow(image: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """The head's shadow where the warm key light is blocked and the cool ambient light remains: the bed
+    darkens, red most and blue least, so its colour changes too (strong evidence, pixel by pixel)."""
+    out = image.astype(np.float32)
+    out[mask] *= np.array([0.8, 0.55, 0.35], np.float32)
+    return np.clip(out, 0, 255).astype(np.uint8)
+
+
+def strands_across(image: np.ndarray, box: Box, colour, coverage: float) -> np.ndarray:
+    """Horizontal 3-px strands every 5 rows across ``box``, each pixel ``coverage`` of the way to ``colour``."""
+    out = image.astype(np.float32)
+    for y in range(box.y0, box.y1, 5):
+        region = out[y:y + 3, box.x0:box.x1]
+        region += coverage * (np.asarray(colour, np.float32) - region)
+    return np.clip(out, 0, 255).astype(np.uint8)
+
+
+ORANGE, BLUE_TAPE = (40, 120, 230), (170, 120, 60)
+BESIDE = Box(60, 100, 100, 170)   # left of the part, inside the search box
+
+
+def test_a_tinted_head_shadow_beside_the_part_is_not_extra_material_but_strands_there_are():
+    bed = bed_texture(colour=BLUE_TAPE)
+    background = camera_effects(bed, seed=11)
+    scene = paint_part(bed, PART, colour=ORANGE)
+    shadowed = camera_effects(tinted_shadow(scene, BESIDE.mask()), shake=(1, 0))
+    ev = material_evidence(background, shadowed, PART.mask(), SAMPLE)
+    assert ev.strong[BESIDE.mask()].mean() > 0.5     # pixel by pixel, the shadow reads as a colour change
+    result = check_shape("cam", background, shadowed, regions())
+    assert result.passed and result.extra_pct < 1.0
+    # strands of the part's colour lying there, each pixel only half covered, are the part's material
+    tangled = camera_effects(strands_across(scene, BESIDE, ORANGE, 0.5), shake=(1, 0))
+    result = check_shape("cam", background, tangled, regions())
+    assert not result.passed and result.extra_pct > 7.0
+
+
+def test_coverage_reads_how_far_a_pixel_moved_towards_the_parts_colour():
+    palette = np.array([[40, 120, 230], [60, 130, 200]], np.float32)    # the orange part's lit faces
+    bed = np.array([[170, 120, 60]] * 4, np.float32)
+    frame = np.array([[105, 120, 145],                                   # half way to the lit orange
+                      [170, 120, 60],                                    # the bed itself
+                      [136, 66, 21],                                     # the tinted shadow: bluer
+                      [40, 120, 230]], np.float32)                       # the part
+    assert coverage_by_part(frame, bed, palette) == pytest.approx([0.5, 0.0, 0.0, 1.0], abs=0.12)
