@@ -52,6 +52,19 @@ SHIFT_PERSISTS_WITHIN_MM = 1.0
 #: from several directions and from one.
 SHIFT_MIN_SUPPORT_PX = 60
 SHIFT_MIN_SUPPORT_ONE_VIEW_PX = 150
+#: A shift the previous check's views read clearly not there (a new one) is also confirmed by the same shares
+#: counted over the pixels it changes that are decided (material or bed) or further than the alignment
+#: tolerance from the moved band's outline: the moved band's outline is as uncertain as the expected one,
+#: so the blurred rim of what is seen around it is no evidence either way. (The plain share counts that rim
+#: as unconfirmed; a 1-2 px residual of the calibration along a long edge then hides a shift of 5 mm.)
+#: Only where part of the support is material sticking out where the model has none (the overhang every
+#: shift makes, SHIFT_OVERHANG_SHARE of it): bed alone showing just inside the expected outline is also a
+#: part a little narrower than the model there.
+SHIFT_OVERHANG_SHARE = 0.25
+#: ... and where the same move the other way reads less than this (of its decided pixels): a shift leaves bed on
+#: its trailing side, while an outline that is just swollen (a glowing filament's halo, blur, a top
+#: over-extruded) sticks out on every side and supports both.
+SHIFT_OPPOSITE_MAX = 0.25
 
 
 @dataclass
@@ -65,8 +78,9 @@ class BandShift:
     moved : pixels the shift changes outside the alignment tolerance (what full evidence would be).
     null_dy, null_score : the band's top raised (< 0) or lowered (> 0) as the image supports best, and
         how well (support - 2 x against, like a shift): the explanation a layer shift must beat.
-    maps : (3, 2 reach_y + 1, 2 reach_x + 1) float32 support, against and moved for every shift
-        (dx, dy) = (index_x - reach_x, index_y - reach_y).
+    maps : (5, 2 reach_y + 1, 2 reach_x + 1) float32 support, against, moved, overhang (the support that is
+        material outside the expected part) and moved_sure (moved less the undecided pixels within the
+        tolerance of the moved band's outline) for every shift (dx, dy) = (index_x - reach_x, index_y - reach_y).
     bed_to_image : (2, 2) image px per bed mm at the part (columns: printer X, Y), or None.
     """
 
@@ -102,6 +116,10 @@ class LayerShift:
         of those with a share of the evidence (VIEWPOINT_MIN_SHARE of ``moved``).
     moved_by : {camera: pixels the shift changes in it (weighted as pooled)}.
     cameras : the cameras it shows to clearly (image shift of at least their ``min_dx``), with their px shift.
+    overhang : of ``support``, material seen where the model has none.
+    moved_sure : of ``moved``, the pixels decided (material or bed) or beyond the alignment tolerance of the
+        moved band's outline (see SHIFT_OVERHANG_SHARE).
+    opposite : the evidence for the move the other way (estimate_layer_shift only; see SHIFT_OPPOSITE_MAX).
     """
 
     shift_mm: np.ndarray
@@ -112,6 +130,9 @@ class LayerShift:
     null_score: float = 0.0
     viewpoints: int = 1   # of those cameras, how many look from clearly different directions
     moved_by: dict[str, float] = field(default_factory=dict)
+    overhang: int = 0   # of the support, material seen where the model has none (the moved band sticking out)
+    moved_sure: int = 0   # of moved, those decided or beyond the tolerance of the moved band's outline
+    opposite: "LayerShift | None" = None   # the same cameras' evidence for the move the other way (-shift_mm)
     # the same shift read in the views of the (up to four) checks before this one that tested their own
     # newest band, newest first (None: nothing there changes); see with_history
     before: list = field(default_factory=list)
@@ -125,6 +146,11 @@ class LayerShift:
         return self.support / max(self.moved, 1)
 
     @property
+    def confirmed_sure(self) -> float:
+        """Share of the decided pixels the shift changes (beyond its own outline's tolerance) that confirm it."""
+        return self.support / max(self.moved_sure, 1)
+
+    @property
     def magnitude_mm(self) -> float:
         return float(np.hypot(*self.shift_mm))
 
@@ -132,6 +158,8 @@ class LayerShift:
         figures = {"shift_mm": [round(float(v), 2) for v in self.shift_mm], "confirmed": round(self.confirmed, 3),
                    "support": self.support, "against": self.against, "moved": self.moved,
                    "null_score": round(self.null_score, 1), "viewpoints": self.viewpoints,
+                   "overhang": self.overhang, "confirmed_sure": round(self.confirmed_sure, 3),
+                   **({"opposite_confirmed": round(self.opposite.confirmed_sure, 3)} if self.opposite else {}),
                    "cameras": {name: list(d) for name, d in self.cameras.items()},
                    "moved_by": {name: round(float(v)) for name, v in self.moved_by.items()}}
         if self.before:
@@ -168,8 +196,8 @@ def band_shift(observed: np.ndarray, bed: np.ndarray, before: np.ndarray, band: 
         return None
     evidence = _Evidence.of(observed, bed, before | band, tolerance)
     null_dy, null_score = _vertical_null(evidence, before, band, reach_y)
-    maps = _band_shift_maps(evidence, before, band, reach_x, reach_y, undecided)
-    support, against, moved = maps
+    maps = _band_shift_maps(evidence, before, band, reach_x, reach_y, undecided, tolerance)
+    support, against, moved = maps[:3]
     dys, dxs = np.mgrid[-reach_y: reach_y + 1, -reach_x: reach_x + 1]
     score = np.where(np.abs(dxs) >= min_dx, support - 2.0 * against, -np.inf)
     iy, ix = np.unravel_index(int(np.argmax(score)), score.shape)
@@ -229,9 +257,10 @@ def _vertical_null(evidence: _Evidence, before: np.ndarray, band: np.ndarray, re
 
 
 def _band_shift_maps(evidence: _Evidence, before: np.ndarray, band: np.ndarray, reach_x: int, reach_y: int,
-                     undecided: np.ndarray | None) -> np.ndarray:
-    """(3, 2 reach_y + 1, 2 reach_x + 1) float32: support, against and moved of :func:`band_shift` for
-    every shift; each count is a correlation of the band with one evidence mask."""
+                     undecided: np.ndarray | None, tolerance: float) -> np.ndarray:
+    """(5, 2 reach_y + 1, 2 reach_x + 1) float32: support, against, moved, overhang and moved_sure of
+    :func:`band_shift` (``BandShift.maps``) for every shift; each count is a correlation of the band (or its
+    rim, or the band grown by ``tolerance``) with one evidence mask."""
     box = bounding_box(band)
     y0, y1, x0, x1 = box
     ring, seen, empty = evidence.ring, evidence.seen, evidence.empty
@@ -251,10 +280,23 @@ def _band_shift_maps(evidence: _Evidence, before: np.ndarray, band: np.ndarray, 
 
     # where the moved band lands outside the expected part: material confirms, bed contradicts;
     # where the band should be and the moved band no longer covers: bed confirms, material contradicts
-    support = corr(seen & outside) + uncovered(fresh & empty)
+    overhang = corr(seen & outside)
+    support = overhang + uncovered(fresh & empty)
     against = corr(empty & outside) + uncovered(fresh & seen)
     moved = corr(outside) + uncovered(fresh & ~ring)
-    return np.stack([support, against, moved]).astype(np.float32)
+    # undecided pixels within the tolerance of the moved band's outline: inside it (where the moved band lands
+    # outside the part: its rim) and just beyond it (where it uncovers the band: the band grown, less the band)
+    unsure = ~seen & ~empty
+    pad = int(np.ceil(tolerance))
+    near = bounding_box(band, pad)
+    window = (slice(near[0], near[1]), slice(near[2], near[3]))
+    inner = band[window] & ~erode(band[window], tolerance)
+    halo = dilate(band[window], tolerance) & ~band[window]
+    rim_unsure = (cv2.matchTemplate(around(outside & unsure, near, reach_x, reach_y), inner.astype(np.float32),
+                                    cv2.TM_CCORR)
+                  + cv2.matchTemplate(around(fresh & ~ring & unsure, near, reach_x, reach_y), halo.astype(np.float32),
+                                      cv2.TM_CCORR))
+    return np.stack([support, against, moved, overhang, moved - rim_unsure]).astype(np.float32)
 
 
 def estimate_layer_shift(views: Mapping[str, BandShift], *, max_mm: float = 8.0,
@@ -268,7 +310,10 @@ def estimate_layer_shift(views: Mapping[str, BandShift], *, max_mm: float = 8.0,
     """
     steps = np.arange(-max_mm, max_mm + 1e-9, step_mm)
     gx, gy = np.meshgrid(steps, steps)
-    return _pooled(views, np.stack([gx.ravel(), gy.ravel()], axis=1))
+    found = _pooled(views, np.stack([gx.ravel(), gy.ravel()], axis=1))
+    if found is not None:
+        found.opposite = _pooled(views, -found.shift_mm.reshape(1, 2))
+    return found
 
 
 def layer_shift_at(views: Mapping[str, BandShift], shift_mm, within_mm: float = 0.0,
@@ -286,7 +331,7 @@ def layer_shift_at(views: Mapping[str, BandShift], shift_mm, within_mm: float = 
 
 def _pooled(views: Mapping[str, BandShift], grid: np.ndarray) -> LayerShift | None:
     """The best of the (n, 2) bed shifts ``grid`` (mm) by the pooled score (estimate_layer_shift)."""
-    total = np.zeros((3, len(grid)), np.float64)
+    total = np.zeros((5, len(grid)), np.float64)
     null = np.zeros(len(grid), np.float64)
     clear = np.zeros(len(grid), bool)          # the shift shows clearly in at least one camera
     shows, directions, moved_by = {}, {}, {}
@@ -305,7 +350,7 @@ def _pooled(views: Mapping[str, BandShift], grid: np.ndarray) -> LayerShift | No
         # that (little but the outline's own wobble changes there), and in proportion between: a hard
         # gate would let a shift hide from a camera that sees the band in place by staying a pixel under it.
         weight = np.clip((np.abs(image[:, 0]) - 0.5 * view.min_dx) / (0.5 * view.min_dx), 0.0, 1.0) * ok
-        values = np.zeros((3, len(grid)))
+        values = np.zeros((5, len(grid)))
         values[:, ok] = view.maps[:, iy[ok], ix[ok]]
         moved_by[name] = values[2] * weight
         total += values * weight
@@ -323,7 +368,8 @@ def _pooled(views: Mapping[str, BandShift], grid: np.ndarray) -> LayerShift | No
     share = {name: float(moved_by[name][best]) for name in cameras}
     return LayerShift(shift_mm=grid[best].copy(), support=int(round(total[0, best])),
                       against=int(round(total[1, best])), moved=int(round(total[2, best])), cameras=cameras,
-                      null_score=float(null[best]), moved_by=share,
+                      null_score=float(null[best]), moved_by=share, overhang=int(round(total[3, best])),
+                      moved_sure=int(round(total[4, best])),
                       viewpoints=_viewpoints({name: directions[name] for name in cameras}, share,
                                              VIEWPOINT_MIN_SHARE * float(total[2, best])))
 
@@ -369,13 +415,35 @@ def _was_there(shift: LayerShift | None) -> bool:
     return shift is not None and shift.confirmed >= SHIFT_WAS_NOT_THERE
 
 
-def _confirms(shift: LayerShift, min_mm: float, several_share: float, one_view_share: float) -> bool:
+def _confirms(shift: LayerShift, min_mm: float, several_share: float, one_view_share: float,
+              sure: bool = False) -> bool:
     several = shift.viewpoints >= 2
+    share = shift.confirmed_sure if sure else shift.confirmed
     return (bool(shift.cameras) and shift.magnitude_mm >= min_mm
             and shift.support >= (SHIFT_MIN_SUPPORT_PX if several else SHIFT_MIN_SUPPORT_ONE_VIEW_PX)
-            and shift.confirmed >= (several_share if several else one_view_share)
+            and share >= (several_share if several else one_view_share)
+            and (not sure or shift.overhang >= SHIFT_OVERHANG_SHARE * shift.support)
             and shift.against <= SHIFT_AGAINST * shift.support
             and shift.score >= SHIFT_OVER_NULL * shift.null_score)
+
+
+def _one_sided(shift: LayerShift) -> bool:
+    """Whether the move the other way is read clearly not there (SHIFT_OPPOSITE_MAX)."""
+    return shift.opposite is None or shift.opposite.confirmed_sure < SHIFT_OPPOSITE_MAX
+
+
+def _confirms_new(shift: LayerShift, min_mm: float) -> bool:
+    """Confirmed at this check over the decided pixels: new (:func:`is_new`), with an overhang
+    (SHIFT_OVERHANG_SHARE) on one side only (SHIFT_OPPOSITE_MAX), at the one-check shares."""
+    return (is_new(shift) and _one_sided(shift)
+            and _confirms(shift, min_mm, SHIFT_CONFIRMED, SHIFT_CONFIRMED_ONE_VIEW, sure=True))
+
+
+def is_new(shift: LayerShift) -> bool:
+    """Whether the previous check tested its own band and its views read this shift clearly not there (under
+    SHIFT_WAS_NOT_THERE of the decided pixels it changes there)."""
+    previous = shift.previous
+    return previous is not None and previous.moved_sure > 0 and previous.confirmed_sure < SHIFT_WAS_NOT_THERE
 
 
 def persists(shift: LayerShift, min_mm: float) -> bool:
@@ -398,13 +466,15 @@ def was_there_before(shift: LayerShift) -> bool:
 
 def confirms_layer_shift(shift: LayerShift, min_mm: float) -> bool:
     """Whether the pooled evidence says the newest layers were printed shifted by ``min_mm`` or more:
-    at this check alone (SHIFT_CONFIRMED, ..._ONE_VIEW), or new and seen at two checks (:func:`persists`),
-    and not there all along (:func:`was_there_before`).
+    at this check alone (SHIFT_CONFIRMED, ..._ONE_VIEW; for a new shift, :func:`is_new`, the same shares of
+    the decided pixels, see SHIFT_OVERHANG_SHARE and SHIFT_OPPOSITE_MAX), or new and seen at two checks
+    (:func:`persists`), and not there all along (:func:`was_there_before`).
 
     The thresholds are shares of pixels (scale-free); see docs/detection.md for what they were
     measured on.
     """
-    return ((_confirms(shift, min_mm, SHIFT_CONFIRMED, SHIFT_CONFIRMED_ONE_VIEW) or persists(shift, min_mm))
+    return ((_confirms(shift, min_mm, SHIFT_CONFIRMED, SHIFT_CONFIRMED_ONE_VIEW) or _confirms_new(shift, min_mm)
+             or persists(shift, min_mm))
             and not was_there_before(shift))
 
 
@@ -413,6 +483,9 @@ def describe_layer_shift(shift: LayerShift) -> str:
     dx, dy = (float(v) for v in shift.shift_mm)
     twice = (f", and {shift.previous.confirmed:.0%} at the previous check"
              if shift.previous is not None and persists(shift, 0.0) else "")
+    share = f"{shift.confirmed:.0%} of the evidence"
+    if not _confirms(shift, 0.0, SHIFT_CONFIRMED, SHIFT_CONFIRMED_ONE_VIEW) and _confirms_new(shift, 0.0):
+        share = f"{shift.confirmed_sure:.0%} of the clear evidence, new since the previous check"
     return (f"the newest layers sit {shift.magnitude_mm:.1f} mm sideways on the layers below "
             f"(X {dx:+.1f} mm, Y {dy:+.1f} mm), confirmed by {', '.join(sorted(shift.cameras))}"
-            f" ({shift.confirmed:.0%} of the evidence{twice}): layer shift?")
+            f" ({share}{twice}): layer shift?")

@@ -2,9 +2,9 @@
 newest band at once) and pooled over cameras (one shift on the bed that every view must agree with)."""
 import numpy as np
 
-from octoprint_printwatch.core.layer_shift import (band_shift, confirms_layer_shift, estimate_layer_shift,
-                                                   layer_shift_at, with_history)
-from octoprint_printwatch.core.masks import shift_mask
+from octoprint_printwatch.core.layer_shift import (band_shift, confirms_layer_shift, describe_layer_shift,
+                                                   estimate_layer_shift, is_new, layer_shift_at, with_history)
+from octoprint_printwatch.core.masks import dilate, shift_mask
 
 from .synthetic import Box
 
@@ -87,7 +87,8 @@ def partly_hidden_shift(dx=10):
     is neither material nor bed (a top face the colour of the bed): about 0.8 confirmed, under the 0.85 one
     view needs at one check."""
     observed = BASE.mask() | BAND.moved(dx, 0).mask()
-    hidden = Box(210, 80, 210 + dx, 92).mask()
+    # (inside the part sticking out, further than the alignment tolerance from its outline)
+    hidden = Box(211, 84, 207 + dx, 104).mask()
     found = view(observed & ~hidden, bed=~observed & ~hidden, J=J_ONE)
     return {"cam": found}
 
@@ -163,3 +164,81 @@ def test_the_cameras_of_a_stereo_pair_add_up_to_one_viewpoint():
     moved = {"single": 80.0, "pairL": 10.0, "pairR": 10.0}
     assert _viewpoints(directions, moved, VIEWPOINT_MIN_SHARE * 100.0) == 2
     assert _viewpoints({"single": 0.0, "pairL": 1.05}, {"single": 80.0, "pairL": 10.0}, VIEWPOINT_MIN_SHARE * 90.0) == 1
+
+
+# Sixth session (helper L): the moved band's outline is as uncertain as the expected one.
+
+def blurred(observed, rim=2):
+    """The camera's masks for a part whose every outline is blurred: ``rim`` px around what is seen are neither
+    material nor bed (an edge a few px soft, as JPEG and optics leave it)."""
+    return observed, ~dilate(observed, rim)
+
+
+def test_a_new_shift_seen_through_a_blurred_outline_is_confirmed_at_once():
+    # 8 px (1.6 mm) sideways, every outline 2 px soft: counted plainly, the soft rim along the moved band's
+    # outline reads as unconfirmed (0.82, under the 0.85 one view needs); as the expected outline's rim it is
+    # no evidence either way
+    observed, bed = blurred(BASE.mask() | BAND.moved(8, 0).mask())
+    seen, bed_seen = blurred(BASE.mask() | BAND.mask())
+    in_place_views = {"cam": view(seen, bed=bed_seen, J=J_ONE)}
+    now = estimate_layer_shift({"cam": view(observed, bed=bed, J=J_ONE)})
+    assert np.allclose(now.shift_mm, [1.6, 0.0], atol=0.3)
+    assert now.confirmed < 0.85 <= now.confirmed_sure and now.overhang > 0.25 * now.support
+    # new: the check before saw the band in place
+    new = with_history(estimate_layer_shift({"cam": view(observed, bed=bed, J=J_ONE)}),
+                       checks(in_place_views, in_place_views))
+    assert is_new(new) and confirms_layer_shift(new, 1.5)
+    assert "new since the previous check" in describe_layer_shift(new)
+
+
+def test_a_shift_through_a_blurred_outline_not_known_to_be_new_needs_the_plain_share():
+    observed, bed = blurred(BASE.mask() | BAND.moved(8, 0).mask())
+    shifted = {"cam": view(observed, bed=bed, J=J_ONE)}
+    # the first check that tested its band: nothing known from before (a calibration residual looks the same)
+    first = with_history(estimate_layer_shift(shifted), checks(shifted, first_tested=False))
+    assert not is_new(first) and not confirms_layer_shift(first, 1.5)
+    # there at the check before too
+    again = with_history(estimate_layer_shift(shifted), checks(shifted))
+    assert not is_new(again) and not confirms_layer_shift(again, 1.5)
+
+
+def test_bed_just_inside_the_expected_outline_alone_is_no_new_shift():
+    # Seen from above, the band's far side lands where a brim or skirt may lie (undecided): a band 8 px
+    # narrower than the model on its near side then reads as a shift, all of it bed where the band should be and
+    # nothing sticking out. A part a little narrower than the model (calibration, scale) looks the same.
+    base, band = Box(110, 110, 210, 170), Box(110, 50, 210, 110)
+    marks = Box(212, 30, 260, 175).mask()
+
+    def one(observed):
+        observed, bed = blurred(observed)
+        return {"cam": band_shift(observed, bed & ~marks, base.mask(), band.mask(), 24, 12, 5, 2.0,
+                                  undecided=marks, bed_to_image=J_ONE)}
+
+    in_place_views = one(base.mask() | band.mask())
+    narrower = with_history(estimate_layer_shift(one(base.mask() | Box(118, 50, 210, 110).mask())),
+                            checks(in_place_views, in_place_views))
+    assert is_new(narrower) and narrower.confirmed_sure >= 0.85 and narrower.overhang == 0
+    assert not confirms_layer_shift(narrower, 1.5)
+
+
+def test_a_newest_band_swollen_on_both_sides_is_no_shift():
+    # The top of the part seen from above, the newest band (its top face) mostly over the previous top; the band
+    # reads 7 px wider on both sides (a glowing filament's halo, blur at low resolution). Material sticks out on
+    # one side for a move either way, so the move the other way reads just as confirmed: a swollen outline,
+    # not one rigid move. (Over the decided pixels the move reads 0.93, new since the previous check.)
+    before, band = Box(110, 84, 210, 170).mask(), Box(110, 80, 210, 110).mask()
+
+    def one(observed):
+        observed, bed = blurred(observed)
+        return {"cam": band_shift(observed, bed, before, band, 24, 12, 5, 2.0, bed_to_image=J_ONE)}
+
+    in_place_views = one(before | band)
+    swollen = with_history(estimate_layer_shift(one(before | Box(103, 80, 217, 110).mask())),
+                           checks(in_place_views, in_place_views))
+    assert is_new(swollen) and swollen.confirmed_sure >= 0.85 and swollen.magnitude_mm >= 1.5
+    assert swollen.opposite.confirmed_sure >= 0.85
+    assert not confirms_layer_shift(swollen, 1.5)
+    # the same band moved 10 px to one side: the move the other way finds bed where the band should stick out
+    moved = with_history(estimate_layer_shift(one(before | Box(120, 80, 220, 110).mask())),
+                         checks(in_place_views, in_place_views))
+    assert moved.opposite.confirmed_sure < 0.1 and confirms_layer_shift(moved, 1.5)
