@@ -416,7 +416,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     * or when loose material (spaghetti) appeared around the part since the previous check: material new
       since then, where the model has none, attached to the part and over 2 mm beyond its outline
       (``ShapeResult.new_outside``), at least 6 mm^2 in two usable views, or 30 mm^2 when only one camera
-      is usable (:func:`core.tangle.loose_material`);
+      is usable, or 6 mm^2 counting blobs in the bed-marks zone in cameras on two different sides
+      (:func:`core.tangle.loose_material`);
     * unknown when no camera and no pair gave usable evidence; ok otherwise.
     """
     if layer_shift is None:
@@ -507,7 +508,11 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
         fail_reasons.append(describe_layer_shift(layer_shift))
         shape_fail = True
     tangle = loose_material({cam: None if r.new_outside is None else r.new_outside.area_mm2
-                             for cam, r in usable.items()})
+                             for cam, r in usable.items()},
+                            with_foot={cam: r.new_outside.with_foot_mm2 for cam, r in usable.items()
+                                       if r.new_outside is not None},
+                            directions={cam: r.new_outside.direction for cam, r in usable.items()
+                                        if r.new_outside is not None})
     if tangle is not None:
         fail_reasons.append(tangle)
         shape_fail = True

@@ -191,6 +191,7 @@ class ShapeResult:
             "shift_px": list(self.shift_px),
             "band_shift": None if self.band_shift is None else self.band_shift.figures(),
             "new_outside_mm2": None if self.new_outside is None else round(self.new_outside.area_mm2, 1),
+            "new_at_foot_mm2": None if self.new_outside is None else round(self.new_outside.at_foot_mm2, 1),
             "threshold": self.threshold,
             "passed": self.passed,
             "usable": self.usable,
@@ -1013,7 +1014,7 @@ def check_shape(
         shadows = not_part_colour(observed & ~grown_a & search_a)
         new_outside = new_material(observed, last_observed[crop], expected_a, search_a, tol, regions.px_per_mm,
                                    ignore=shadows if reflection_a is None else reflection_a | shadows,
-                                   marks=dont_care_a, linked=~evidence.bed)
+                                   marks=dont_care_a, linked=~evidence.bed, bed_to_image=regions.bed_to_image)
 
     reasons: list[str] = []
     decisive = False

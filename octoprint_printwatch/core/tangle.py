@@ -30,6 +30,7 @@ from typing import Mapping
 import cv2
 import numpy as np
 
+from .layer_shift import VIEWPOINT_APART_DEG
 from .masks import dilate, disk, outline_zone, reaching_in_from_above
 
 #: New material closer than this to the expected silhouette (mm at the part) is not counted: the residual
@@ -45,15 +46,29 @@ class NewMaterial:
     pixels : counted pixels.
     blobs : number of attached blobs counted.
     mask : (h, w) bool, the counted pixels (crop or frame coordinates, as the inputs), or None.
+    at_foot_mm2 : mm^2 of the attached blobs left out of ``area_mm2`` because they lie in the bed-marks zone
+        (loops lying on the bed around the foot, or piled on a short part's top where an oblique view sees
+        the bed ring behind it); :func:`loose_material` counts them only when two viewpoints agree.
+    direction : radians, the bed direction the camera's image x follows at the part: which side the camera
+        looks from (the two cameras of a stereo pair share it, opposite cameras differ by pi); None when
+        unknown.
     """
 
     area_mm2: float
     pixels: int
     blobs: int
     mask: np.ndarray | None = field(default=None, repr=False)
+    at_foot_mm2: float = 0.0
+    direction: float | None = None
+
+    @property
+    def with_foot_mm2(self) -> float:
+        """All new material attached to the part beyond the outline, the bed-marks zone included (mm^2)."""
+        return self.area_mm2 + self.at_foot_mm2
 
     def figures(self) -> dict:
-        return {"new_outside_mm2": round(self.area_mm2, 1), "new_outside_blobs": self.blobs}
+        return {"new_outside_mm2": round(self.area_mm2, 1), "new_outside_blobs": self.blobs,
+                "new_at_foot_mm2": round(self.at_foot_mm2, 1)}
 
 
 def new_material(
@@ -69,6 +84,7 @@ def new_material(
     linked: np.ndarray | None = None,
     min_distance_mm: float = MIN_DISTANCE_MM,
     attach_px: float = 3.0,
+    bed_to_image: np.ndarray | None = None,
 ) -> NewMaterial | None:
     """Material seen now and not at the previous check, outside the expected part and attached to it.
 
@@ -86,12 +102,15 @@ def new_material(
     attach_px : a blob counts when it comes this close (px) to the outline's tolerance ring: the material
         seen at the previous check is grown by 2 px before it is subtracted, so a strand's root next to the
         part is taken away with it.
+    bed_to_image : (2, 2) image px per bed mm at the part (columns: printer X, Y) or None: gives
+        :attr:`NewMaterial.direction`.
     Returns None when the test cannot be made (no scale, no previous mask, empty expected part).
     """
     if px_per_mm <= 0 or previous is None or previous.shape != observed.shape or not expected.any():
         return None
     tol = float(tolerance)
-    none = NewMaterial(0.0, 0, 0, np.zeros(observed.shape, bool))
+    direction = None if bed_to_image is None else float(np.arctan2(bed_to_image[0, 1], bed_to_image[0, 0]))
+    none = NewMaterial(0.0, 0, 0, np.zeros(observed.shape, bool), direction=direction)
     distance = cv2.distanceTransform((~expected).astype(np.uint8), cv2.DIST_L2, 3)
     # upwards the tolerance is doubled: the part's top may stand a layer higher than the model says
     grown = outline_zone(expected, tol, tol)
@@ -112,17 +131,21 @@ def new_material(
     keep[0] = False
     ys, xs = np.nonzero(new)
     ids = labels[ys, xs]
-    if marks is not None and count > 1:
-        inside = np.bincount(ids, weights=marks[ys, xs], minlength=count)
-        keep &= inside < 0.8 * np.maximum(stats[:, cv2.CC_STAT_AREA], 1)
     # attached to the part: a blob of new material that reaches the expected part's tolerance ring; a line
     # far from the part flickering between two frames (the bed's edge) is not
     contact = cv2.dilate(grown.astype(np.uint8), disk(attach_px)).astype(bool)
     keep &= np.bincount(ids, weights=contact[ys, xs], minlength=count) > 0
+    at_foot = np.zeros(count, bool)
+    if marks is not None and count > 1:
+        inside = np.bincount(ids, weights=marks[ys, xs], minlength=count)
+        at_foot = keep & (inside >= 0.8 * np.maximum(stats[:, cv2.CC_STAT_AREA], 1))
+        keep &= ~at_foot
     counted = keep[labels] & far
     pixels = int(counted.sum())
+    foot_pixels = int(np.count_nonzero(at_foot[labels] & far)) if at_foot.any() else 0
     blobs = int(len(np.unique(labels[counted]))) if pixels else 0
-    return NewMaterial(pixels / (px_per_mm * px_per_mm), pixels, blobs, counted)
+    scale = 1.0 / (px_per_mm * px_per_mm)
+    return NewMaterial(pixels * scale, pixels, blobs, counted, at_foot_mm2=foot_pixels * scale, direction=direction)
 
 
 #: New material (mm^2 at the part) that fails the print when two views see at least this much each...
@@ -131,8 +154,25 @@ TWO_VIEWS_MM2 = 6.0
 ONE_VIEW_MM2 = 30.0
 
 
+def viewpoints(directions: Mapping[str, float | None]) -> int:
+    """How many clearly different sides the cameras look from: directions (radians, see
+    :attr:`NewMaterial.direction`) less than VIEWPOINT_APART_DEG apart count once (the two cameras of a
+    stereo pair look from nearly one place; a camera opposite another sees the part's other side); cameras
+    of unknown direction count once together."""
+    apart = np.radians(VIEWPOINT_APART_DEG)
+    kept: list[float] = []
+    unknown = False
+    for angle in directions.values():
+        if angle is None:
+            unknown = True
+        elif not any(abs(np.angle(np.exp(1j * (angle - k)))) < apart for k in kept):
+            kept.append(angle)
+    return len(kept) + int(unknown)
+
+
 def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = TWO_VIEWS_MM2,
-                   one_view_mm2: float = ONE_VIEW_MM2) -> str | None:
+                   one_view_mm2: float = ONE_VIEW_MM2, with_foot: Mapping[str, float | None] | None = None,
+                   directions: Mapping[str, float | None] | None = None) -> str | None:
     """The reason to pause for loose material piling up around the part, or None.
 
     ``areas`` maps every usable camera to its :attr:`NewMaterial.area_mm2` (None: not measured). A tangle
@@ -140,11 +180,20 @@ def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = 
     what lies behind it flickering in and out of the mask, the part's own side growing beyond an outline
     the calibration misplaced, the parked hotend): with two or more usable cameras two views must agree.
     With one usable camera nothing can corroborate it, so that view must see five times as much.
+
+    ``with_foot`` (per camera, :attr:`NewMaterial.with_foot_mm2`) adds the blobs lying in the bed-marks
+    zone, and ``directions`` where each camera looks from: loops lying on the bed around the foot, or piled
+    on a short part's top where an oblique camera sees the bed ring behind it, count when cameras on two
+    different sides (:func:`viewpoints`) each see ``two_views_mm2`` of them. A skirt or brim line
+    flickering in and out of the mask is one camera's artefact (its contrast at that camera's threshold),
+    and a stereo pair's two cameras see the same artefact from one place.
     """
     seen = {cam: a for cam, a in areas.items() if a is not None and a >= two_views_mm2}
-    if len(seen) >= 2 or (len(areas) == 1 and any(a >= one_view_mm2 for a in seen.values())):
-        views = ", ".join(f"{cam} {a:.0f} mm²" for cam, a in sorted(seen.items(), key=lambda kv: -kv[1]))
-        return (f"material appeared around the part since the previous check where the model has none "
-                f"({views}): spaghetti, or the part knocked loose?")
-    return None
+    if not (len(seen) >= 2 or (len(areas) == 1 and any(a >= one_view_mm2 for a in seen.values()))):
+        seen = {cam: a for cam, a in (with_foot or {}).items() if a is not None and a >= two_views_mm2}
+        if viewpoints({cam: (directions or {}).get(cam) for cam in seen}) < 2:
+            return None
+    views = ", ".join(f"{cam} {a:.0f} mm²" for cam, a in sorted(seen.items(), key=lambda kv: -kv[1]))
+    return (f"material appeared around the part since the previous check where the model has none "
+            f"({views}): spaghetti, or the part knocked loose?")
 

@@ -14,7 +14,8 @@ import pytest
 from octoprint_printwatch.core.pipeline import decide
 from octoprint_printwatch.core.settings import DetectionSettings
 from octoprint_printwatch.core.shape_check import check_shape
-from octoprint_printwatch.core.tangle import ONE_VIEW_MM2, TWO_VIEWS_MM2, loose_material, new_material
+from octoprint_printwatch.core.tangle import (ONE_VIEW_MM2, TWO_VIEWS_MM2, NewMaterial, loose_material, new_material,
+                                             viewpoints)
 
 from .synthetic import H, PART, W, Box, bed_texture, camera_effects, paint_part, regions
 
@@ -119,6 +120,46 @@ def test_a_skirt_line_flickering_into_the_mask_does_not_count():
     assert measure(now | strand, PART.mask(), marks=marks).area_mm2 > 0
 
 
+def test_loops_lying_around_the_foot_are_measured_apart():
+    # a tangle lying on the bed beside the part's foot, wholly inside the bed-marks zone
+    marks = Box(60, 150, 260, 200).mask()
+    tangle = loops(centre=(236, 178), spread=(10, 6), count=12, thickness=2) & ~PART.mask()
+    tangle[150:179, 211:214] = True                  # attached: one strand down the part's side ...
+    tangle[176:179, 211:250] = True                  # ... and along the bed through the loops
+    tangle &= marks
+    now = PART.mask() | tangle
+    distance = cv2.distanceTransform((~PART.mask()).astype(np.uint8), cv2.DIST_L2, 3)
+    beyond = int((tangle & (distance > 2.0 * PX_PER_MM)).sum())
+    # looking along printer X with x (a camera in front of the bed), then along printer Y (from the side)
+    front = measure(now, PART.mask(), marks=marks, bed_to_image=np.array([[PX_PER_MM, 0.0], [0.0, -2.0]]))
+    side = measure(now, PART.mask(), marks=marks, bed_to_image=np.array([[0.0, PX_PER_MM], [2.0, 0.0]]))
+    assert front.area_mm2 == 0.0                     # not counted as before: it lies where a skirt would
+    assert front.at_foot_mm2 == pytest.approx(beyond / PX_PER_MM ** 2) and front.at_foot_mm2 >= TWO_VIEWS_MM2
+    assert front.with_foot_mm2 == pytest.approx(front.at_foot_mm2)
+    assert front.direction == pytest.approx(0.0) and side.direction == pytest.approx(np.pi / 2)
+    assert front.figures()["new_at_foot_mm2"] == pytest.approx(front.at_foot_mm2, abs=0.05)
+    # a skirt line flickering in the same zone is not attached to the part: nothing at all
+    skirt = Box(95, 190, 225, 192).mask()
+    assert measure(PART.mask() | skirt, PART.mask(), marks=marks).at_foot_mm2 == 0.0
+
+
+def test_material_at_the_foot_counts_when_two_sides_see_it():
+    assert viewpoints({"a": 0.0, "b": np.radians(10.0)}) == 1       # a stereo pair: one place
+    assert viewpoints({"a": np.radians(-175.0), "b": np.radians(178.0)}) == 1   # 7 deg apart
+    assert viewpoints({"a": 0.0, "b": np.pi}) == 2                             # opposite sides
+    assert viewpoints({"a": 0.0, "b": np.radians(60.0), "c": None}) == 3
+    outside = {"a": 0.0, "b": 0.0}
+    foot = {"a": TWO_VIEWS_MM2 + 2, "b": TWO_VIEWS_MM2 + 1}
+    two_sides = {"a": 0.0, "b": np.radians(90.0)}
+    reason = loose_material(outside, with_foot=foot, directions=two_sides)
+    assert reason is not None and "a 8 mm²" in reason
+    # one side only: a pair (or one camera) that sees a line flicker at the foot does not pause
+    assert loose_material(outside, with_foot=foot, directions={"a": 0.0, "b": np.radians(12.0)}) is None
+    assert loose_material(outside, with_foot={"a": foot["a"], "b": TWO_VIEWS_MM2 - 1}, directions=two_sides) is None
+    assert loose_material({"a": 0.0}, with_foot={"a": 10 * ONE_VIEW_MM2}, directions={"a": 0.0}) is None
+    assert loose_material(outside) is None                            # without the zone's blobs: nothing
+
+
 def test_ignored_zones_and_missing_inputs():
     tangle = loops(centre=(150, 190), spread=(2, 8)) & ~PART.mask()
     tangle[168:200, 149:152] = True                 # hanging from the part's foot through every loop
@@ -170,4 +211,20 @@ def test_check_shape_reports_the_tangle_and_decide_pauses_on_two_views(bed):
     verdict, reasons = decide({"cam0": tangled, "cam1": replace(tangled, camera="cam1")}, {}, settings)
     assert verdict == "fail" and any("material appeared around the part" in r for r in reasons)
     verdict, _ = decide({"cam0": normal, "cam1": replace(normal, camera="cam1")}, {}, settings)
+    assert verdict == "ok"
+
+
+def test_decide_pauses_on_loops_at_the_foot_seen_from_two_sides(bed):
+    first = shape_of(bed, camera_effects(paint_part(bed, PART)), None)
+    normal = shape_of(bed, camera_effects(paint_part(bed, PART), seed=5), first.observed_mask)
+    settings = DetectionSettings()
+
+    def seen(direction_deg):
+        foot = NewMaterial(0.0, 0, 0, at_foot_mm2=TWO_VIEWS_MM2 + 3, direction=np.radians(direction_deg))
+        return replace(normal, new_outside=foot)
+
+    verdict, reasons = decide({"cam0": seen(0), "cam1": replace(seen(70), camera="cam1")}, {}, settings)
+    assert verdict == "fail" and any("material appeared around the part" in r for r in reasons)
+    # the two cameras of one stereo pair look from one side: no pause
+    verdict, _ = decide({"cam0": seen(0), "cam1": replace(seen(8), camera="cam1")}, {}, settings)
     assert verdict == "ok"
