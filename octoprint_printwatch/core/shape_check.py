@@ -357,17 +357,16 @@ def coverage_by_part(frame: np.ndarray, background: np.ndarray, palette: np.ndar
     (k, 3): per pixel, the palette colour whose linear mix ``background + c (colour - background)`` best
     explains the frame (least residual) gives ``c``, clipped to [0, 1.5]. Where the part's colour is
     the background's, any change reads as high coverage (no blob is ever dropped for it)."""
-    change = frame.astype(np.float32) - background.astype(np.float32)          # (n, 3)
-    best = np.zeros(len(change), np.float32)
-    best_residual = np.full(len(change), np.inf, np.float32)
-    for colour in np.asarray(palette, np.float32):
-        towards = colour[None, :] - background.astype(np.float32)                # (n, 3)
-        c = np.clip((change * towards).sum(axis=1) / np.maximum((towards * towards).sum(axis=1), 1.0), 0.0, 1.5)
-        residual = np.linalg.norm(change - c[:, None] * towards, axis=1)
-        better = residual < best_residual
-        best[better] = c[better]
-        best_residual[better] = residual[better]
-    return best
+    bg = background.astype(np.float32)
+    change = frame.astype(np.float32) - bg                                        # (n, 3)
+    colours = np.asarray(palette, np.float32)                                     # (k, 3)
+    # with towards = colour - background, per pixel and colour (n, k), expanded so no (n, k, 3) is built
+    along = change @ colours.T - (change * bg).sum(axis=1)[:, None]               # change . towards
+    length2 = ((colours * colours).sum(axis=1)[None, :] - 2.0 * (bg @ colours.T)
+               + (bg * bg).sum(axis=1)[:, None])                                  # |towards|^2
+    c = np.clip(along / np.maximum(length2, 1.0), 0.0, 1.5)
+    residual2 = (change * change).sum(axis=1)[:, None] - 2.0 * c * along + c * c * length2
+    return c[np.arange(len(c)), np.argmin(residual2, axis=1)] if len(c) else np.zeros(0, np.float32)
 
 
 def not_the_part_colour(extra: np.ndarray, frame: np.ndarray, background: np.ndarray,
@@ -376,16 +375,24 @@ def not_the_part_colour(extra: np.ndarray, frame: np.ndarray, background: np.nda
     PART_COLOUR_MIN_COVERAGE, on ``frame`` (h, w, 3) and ``background`` (h, w, 3, at the frame's exposure)
     with the part's ``palette`` (k, 3)."""
     out = np.zeros(extra.shape, bool)
-    count, labels = cv2.connectedComponents(extra.astype(np.uint8), connectivity=8)
-    if count <= 1:
+    ys, xs = np.nonzero(extra)
+    if len(ys) == 0:
         return out
-    inside = labels > 0
-    coverage = coverage_by_part(frame[inside], background[inside], palette)
-    which = labels[inside]
-    mean = np.bincount(which, weights=coverage, minlength=count) / np.maximum(np.bincount(which, minlength=count), 1)
-    faint = mean < PART_COLOUR_MIN_COVERAGE
+    y0, x0 = int(ys.min()), int(xs.min())
+    box = (slice(y0, int(ys.max()) + 1), slice(x0, int(xs.max()) + 1))
+    count, labels = cv2.connectedComponents(extra[box].astype(np.uint8), connectivity=8)
+    # a blob's mean is estimated on up to ~2,000 of the pixels (evenly spread); a blob none of them falls
+    # in is never dropped
+    step = max(1, len(ys) // 2000)
+    ys, xs = ys[::step], xs[::step]
+    which = labels[ys - y0, xs - x0]
+    coverage = coverage_by_part(frame[ys, xs], background[ys, xs], palette)
+    sampled = np.bincount(which, minlength=count)
+    mean = np.bincount(which, weights=coverage, minlength=count) / np.maximum(sampled, 1)
+    faint = (sampled > 0) & (mean < PART_COLOUR_MIN_COVERAGE)
     faint[0] = False
-    return faint[labels]
+    out[box] = faint[labels]
+    return out
 
 
 def detectable_fraction(palette: np.ndarray, background: np.ndarray, noise: dict,
@@ -1011,10 +1018,9 @@ def check_shape(
     # part, attached to it; pipeline.decide weighs it over the cameras
     new_outside = None
     if last_observed is not None and last_observed.shape == (h, w):
-        shadows = not_part_colour(observed & ~grown_a & search_a)
         new_outside = new_material(observed, last_observed[crop], expected_a, search_a, tol, regions.px_per_mm,
-                                   ignore=shadows if reflection_a is None else reflection_a | shadows,
-                                   marks=dont_care_a, linked=~evidence.bed, bed_to_image=regions.bed_to_image)
+                                   ignore=reflection_a, marks=dont_care_a, linked=~evidence.bed,
+                                   bed_to_image=regions.bed_to_image, not_the_prints=not_part_colour)
 
     reasons: list[str] = []
     decisive = False

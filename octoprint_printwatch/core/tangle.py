@@ -25,7 +25,7 @@ any frame size and camera distance.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Mapping
+from typing import Callable, Mapping
 
 import cv2
 import numpy as np
@@ -85,6 +85,7 @@ def new_material(
     min_distance_mm: float = MIN_DISTANCE_MM,
     attach_px: float = 3.0,
     bed_to_image: np.ndarray | None = None,
+    not_the_prints: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> NewMaterial | None:
     """Material seen now and not at the previous check, outside the expected part and attached to it.
 
@@ -104,6 +105,9 @@ def new_material(
         part is taken away with it.
     bed_to_image : (2, 2) image px per bed mm at the part (columns: printer X, Y) or None: gives
         :attr:`NewMaterial.direction`.
+    not_the_prints : ((h, w) bool material -> (h, w) bool) or None: marks the blobs of the material outside the
+        outline that are something else (check_shape: not of the part's colour, a shadow); they never count.
+        Called only when there is new material to count (most checks have none).
     Returns None when the test cannot be made (no scale, no previous mask, empty expected part).
     """
     if px_per_mm <= 0 or previous is None or previous.shape != observed.shape or not expected.any():
@@ -121,6 +125,15 @@ def new_material(
     far = distance > min_distance_mm * px_per_mm
     if not (new & far).any():   # most checks of a normal print end here
         return none
+    if not_the_prints is not None:
+        # judged on whole objects (the material outside the outline), only those holding new material
+        count, labels = cv2.connectedComponents((outside & search).astype(np.uint8), connectivity=8)
+        holding = np.zeros(count, bool)
+        holding[labels[new & far]] = True
+        holding[0] = False
+        new &= ~not_the_prints(holding[labels])
+        if not (new & far).any():
+            return none
     # objects reaching in from above the search box are not the print's (the hotend, the gantry), grouped
     # with everything not confidently bed as in compare_masks (the nozzle and its dark body are one object);
     # nor are strands leaving the box upwards on their own (filament pulled towards the parked nozzle)

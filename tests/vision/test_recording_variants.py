@@ -127,21 +127,14 @@ def placed_cube_model(rec: Path) -> str:
     return "model.stl"
 
 
-def test_model_and_gcode_both_given(plain, tmp_path):
+@pytest.mark.parametrize("keep_gcode", [True, False], ids=["model_and_gcode", "model_only"])
+def test_a_model_where_the_slicer_put_it_gives_the_gcodes_verdicts(plain, tmp_path, keep_gcode):
     rec = copy_of(CUBE, tmp_path)
     doc = session(rec)
     doc["model"] = placed_cube_model(rec)
-    save(rec, doc)
-    got = figures(evaluate(rec))
-    assert [c[1] for c in got] == [c[1] for c in plain[CUBE]]
-
-
-def test_model_only_where_the_gcode_was(plain, tmp_path):
-    rec = copy_of(CUBE, tmp_path)
-    doc = session(rec)
-    doc["model"] = placed_cube_model(rec)
-    del doc["gcode"]
-    (rec / "print.gcode").unlink()
+    if not keep_gcode:
+        del doc["gcode"]
+        (rec / "print.gcode").unlink()
     save(rec, doc)
     got = figures(evaluate(rec))
     assert [c[1] for c in got] == [c[1] for c in plain[CUBE]]
