@@ -346,8 +346,8 @@ def part_palette(frame: np.ndarray, mask: np.ndarray, groups: int = 5) -> np.nda
 
 #: An extra blob whose pixels moved, on average, less than this share of the way from the bed towards the
 #: part's colours holds none of the part's material: the hotend's shadow, a lighting change. Measured on
-#: both simulators: 0.02-0.07 for head shadows; 0.28 or more for every detached part, shifted layer and
-#: spaghetti blob (a strand covering half a pixel reads about 0.5 there).
+#: both simulators: 0.02-0.07 for head shadows; 0.28 or more for detached parts, shifted layers and
+#: spaghetti (a strand covering half a pixel reads about 0.5; docs/detection-shadows.md).
 PART_COLOUR_MIN_COVERAGE = 0.15
 
 

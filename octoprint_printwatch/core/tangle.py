@@ -127,11 +127,11 @@ def new_material(
         return none
     if not_the_prints is not None:
         # judged on whole objects (the material outside the outline), only those holding new material
-        count, labels = cv2.connectedComponents((outside & search).astype(np.uint8), connectivity=8)
-        holding = np.zeros(count, bool)
-        holding[labels[new & far]] = True
+        objects, object_of = cv2.connectedComponents((outside & search).astype(np.uint8), connectivity=8)
+        holding = np.zeros(objects, bool)
+        holding[object_of[new & far]] = True
         holding[0] = False
-        new &= ~not_the_prints(holding[labels])
+        new &= ~not_the_prints(holding[object_of])
         if not (new & far).any():
             return none
     # objects reaching in from above the search box are not the print's (the hotend, the gantry), grouped
