@@ -370,23 +370,25 @@ def _pooled(views: Mapping[str, BandShift], grid: np.ndarray) -> LayerShift | No
                       against=int(round(total[1, best])), moved=int(round(total[2, best])), cameras=cameras,
                       null_score=float(null[best]), moved_by=share, overhang=int(round(total[3, best])),
                       moved_sure=int(round(total[4, best])),
-                      viewpoints=_viewpoints({name: directions[name] for name in cameras}, share,
+                      viewpoints=count_viewpoints({name: directions[name] for name in cameras}, share,
                                              VIEWPOINT_MIN_SHARE * float(total[2, best])))
 
 
-def _viewpoints(directions: Mapping[str, float], moved_by: Mapping[str, float] | None = None,
-                min_moved: float = 0.0) -> int:
-    """How many clearly different directions the cameras look from: bed directions (radians, mod pi) less
-    than VIEWPOINT_APART_DEG apart count once (the two cameras of a stereo pair look from nearly one
+def count_viewpoints(directions: Mapping[str, float], moved_by: Mapping[str, float] | None = None,
+                     min_moved: float = 0.0, period: float = np.pi) -> int:
+    """How many clearly different directions the cameras look from: directions (radians, modulo ``period``)
+    less than VIEWPOINT_APART_DEG apart count once (the two cameras of a stereo pair look from nearly one
     place), and a direction counts only where the shift changes at least ``min_moved`` pixels in its
-    cameras together (``moved_by``, per camera)."""
+    cameras together (``moved_by``, per camera). A sideways shift is seen along one axis from either side
+    (``period`` pi); ``core.tangle`` counts opposite sides apart (2 pi)."""
     apart = np.radians(VIEWPOINT_APART_DEG)
     moved_by = moved_by or {}
     kept: list[list] = []            # [direction, pixels changed] per viewpoint, the most changed first
     for name in sorted(directions, key=lambda n: -moved_by.get(n, 0.0)):
         angle = directions[name]
         for group in kept:
-            if min(abs(angle - group[0]) % np.pi, np.pi - abs(angle - group[0]) % np.pi) < apart:
+            difference = abs(angle - group[0]) % period
+            if min(difference, period - difference) < apart:
                 group[1] += moved_by.get(name, 0.0)
                 break
         else:

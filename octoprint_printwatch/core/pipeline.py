@@ -175,9 +175,7 @@ def prepare_job(
     if not cameras:
         raise PrintWatchError("no cameras: the checks need at least one calibrated camera")
     notes: list[str] = []
-    if part is None:
-        if model_path is None and gcode_path is None:
-            raise PrintWatchError("neither a model nor a G-code file: the expected part is unknown")
+    if part is None:   # part_for_job says so when neither a model nor a G-code file is given
         part = part_for_job(model_path, gcode_path)
     notes.extend(getattr(part, "notes", []) or [])
     cameras = {name: working_camera(cam, settings.working_width) for name, cam in cameras.items()}
@@ -375,13 +373,16 @@ def band_shifts_of(shape: Mapping[str, ShapeResult]) -> dict[str, BandShift]:
 
 
 def layer_shift_of(shape: Mapping[str, ShapeResult],
-                   history: Sequence[tuple[bool, Mapping[str, BandShift]]] = ()) -> LayerShift | None:
+                   history: Sequence[tuple[bool, Mapping[str, BandShift]]] = (),
+                   band_shifts: Mapping[str, BandShift] | None = None) -> LayerShift | None:
     """The bed shift of the newest layers that the usable cameras confirm together (or None).
 
     ``history``: (had a check before it, band_shifts_of) of the previous checks, oldest first: the evidence
-    for the same shift at those checks (``core.layer_shift.with_history``).
+    for the same shift at those checks (``core.layer_shift.with_history``). ``band_shifts``: this check's
+    ``band_shifts_of(shape)`` when the caller has it already.
     """
-    return with_history(estimate_layer_shift(band_shifts_of(shape)), history)
+    return with_history(estimate_layer_shift(band_shifts_of(shape) if band_shifts is None else band_shifts),
+                        history)
 
 
 def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings: DetectionSettings,
@@ -626,8 +627,9 @@ class CheckRunner:
         shape_seconds = time.perf_counter() - started
         shape_cpu_seconds = time.process_time() - cpu_started
         size = self._size_check(z, frames, shape)
-        layer_shift = layer_shift_of(shape, self.band_shift_history)
-        self.band_shift_history = [*self.band_shift_history, (self.previous_z is not None, band_shifts_of(shape))][-4:]
+        band_shifts = band_shifts_of(shape)
+        layer_shift = layer_shift_of(shape, self.band_shift_history, band_shifts)
+        self.band_shift_history = [*self.band_shift_history, (self.previous_z is not None, band_shifts)][-4:]
         top_closing = self.plan.top_closing(z)
         verdict, reasons = decide(shape, size, settings, unreadable, layer_shift=layer_shift,
                                   top_closing=top_closing)
@@ -783,7 +785,7 @@ def evaluate_recording(recording, settings: DetectionSettings | None = None, *, 
         "checks": [r.to_json() for r in results],
         "first_failure_layer": first_failure_layer(results),
         "settings": settings.to_dict(),
-        "notes": [*getattr(recording, "notes", []), *plan.notes],
+        "notes": [*recording.notes, *plan.notes],
     }
     if keep_results:
         doc["_results"] = results

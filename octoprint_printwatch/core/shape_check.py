@@ -190,8 +190,8 @@ class ShapeResult:
             "growth_pct": None if self.growth_pct is None else round(self.growth_pct, 1),
             "shift_px": list(self.shift_px),
             "band_shift": None if self.band_shift is None else self.band_shift.figures(),
-            "new_outside_mm2": None if self.new_outside is None else round(self.new_outside.area_mm2, 1),
-            "new_at_foot_mm2": None if self.new_outside is None else round(self.new_outside.at_foot_mm2, 1),
+            **(self.new_outside.figures() if self.new_outside is not None
+               else {"new_outside_mm2": None, "new_outside_blobs": None, "new_at_foot_mm2": None}),
             "threshold": self.threshold,
             "passed": self.passed,
             "usable": self.usable,
@@ -735,8 +735,8 @@ def compare_masks(
     alignment is the least certain); ``linked`` ((h, w) bool, everything not confidently bed) groups
     extra pixels into objects for the "from above" test, and a blob reaching the part's lowest
     quarter is never foreign (a tipped part stands on the bed). ``not_the_prints`` ((h, w) bool extra ->
-    (h, w) bool) marks blobs of the extra material that are something else, found with what the crop
-    cannot show; they are left out of every figure.
+    (h, w) bool) marks blobs of the extra material that are something else, found with what these masks
+    cannot show (the frame's colours, the full frame); they are left out of every figure.
     """
     core = erode(expected, tolerance)
     missing = core & bed & ~observed
@@ -793,8 +793,8 @@ def compare_masks(
         flat[0] = False
         extra &= ~flat[labels]
     if not_the_prints is not None and extra.any():
-        # blobs found to be something else with what this crop cannot show (check_shape: the mirror image
-        # of the parked hotend), dropped before any figure is counted
+        # blobs found to be something else with what these masks cannot show (check_shape: not of the part's
+        # colour, or the mirror image of the parked hotend), dropped before any figure is counted
         extra &= ~not_the_prints(extra)
     band_core = band & core
     near_band = dilate(band, band_reach) & ~grown

@@ -30,7 +30,7 @@ from typing import Callable, Mapping
 import cv2
 import numpy as np
 
-from .layer_shift import VIEWPOINT_APART_DEG
+from .layer_shift import count_viewpoints
 from .masks import dilate, disk, outline_zone, reaching_in_from_above
 
 #: New material closer than this to the expected silhouette (mm at the part) is not counted: the residual
@@ -172,15 +172,8 @@ def viewpoints(directions: Mapping[str, float | None]) -> int:
     :attr:`NewMaterial.direction`) less than VIEWPOINT_APART_DEG apart count once (the two cameras of a
     stereo pair look from nearly one place; a camera opposite another sees the part's other side); cameras
     of unknown direction count once together."""
-    apart = np.radians(VIEWPOINT_APART_DEG)
-    kept: list[float] = []
-    unknown = False
-    for angle in directions.values():
-        if angle is None:
-            unknown = True
-        elif not any(abs(np.angle(np.exp(1j * (angle - k)))) < apart for k in kept):
-            kept.append(angle)
-    return len(kept) + int(unknown)
+    known = {cam: angle for cam, angle in directions.items() if angle is not None}
+    return count_viewpoints(known, period=2.0 * np.pi) + int(len(known) < len(directions))
 
 
 def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = TWO_VIEWS_MM2,

@@ -159,11 +159,11 @@ def test_a_camera_that_sees_nothing_change_is_no_second_viewpoint():
 
 def test_the_cameras_of_a_stereo_pair_add_up_to_one_viewpoint():
     # two directions 60 deg apart; the pair's cameras each carry a tenth of the changed pixels, together a fifth
-    from octoprint_printwatch.core.layer_shift import VIEWPOINT_MIN_SHARE, _viewpoints
+    from octoprint_printwatch.core.layer_shift import VIEWPOINT_MIN_SHARE, count_viewpoints
     directions = {"single": 0.0, "pairL": 1.05, "pairR": 1.10}
     moved = {"single": 80.0, "pairL": 10.0, "pairR": 10.0}
-    assert _viewpoints(directions, moved, VIEWPOINT_MIN_SHARE * 100.0) == 2
-    assert _viewpoints({"single": 0.0, "pairL": 1.05}, {"single": 80.0, "pairL": 10.0}, VIEWPOINT_MIN_SHARE * 90.0) == 1
+    assert count_viewpoints(directions, moved, VIEWPOINT_MIN_SHARE * 100.0) == 2
+    assert count_viewpoints({"single": 0.0, "pairL": 1.05}, {"single": 80.0, "pairL": 10.0}, VIEWPOINT_MIN_SHARE * 90.0) == 1
 
 
 # Sixth session (helper L): the moved band's outline is as uncertain as the expected one.
