@@ -6,9 +6,11 @@ sees (one correlation per evidence mask, so all shifts cost a few milliseconds).
 confirm together: each camera's image shift of a bed shift D is ``J @ D`` (``J``, the camera's
 (2, 2) image pixels per bed millimetre at the part), so a camera that sees the shift sideways
 confirms it, a camera it would show to and that sees the band in place contradicts it, and a camera
-looking along it abstains. A real layer shift is one rigid move of the top of the part, the same in
-every view; an outline that sits a little off in one view (alignment, calibration, a face the
-colour of the bed) is not.
+looking along it sees it only as the band moved up or down (or not at all). A real layer shift is one
+rigid move of the top of the part, the same in every view; an outline that sits a little off in one
+view (alignment, calibration, a face the colour of the bed) is not. A band moved up or down alone is
+also a part standing taller or lower: that explanation is one height error in every view
+(``_height_null``), and the shift has to beat it.
 """
 from __future__ import annotations
 
@@ -65,6 +67,9 @@ SHIFT_OVERHANG_SHARE = 0.25
 #: its trailing side, while an outline that is just swollen (a glowing filament's halo, blur, a top
 #: over-extruded) sticks out on every side and supports both.
 SHIFT_OPPOSITE_MAX = 0.25
+#: The top of the part as one camera sees it may sit this far (px) from where one height error puts it in
+#: every view: that camera's calibration residual.
+HEIGHT_NULL_TOLERANCE_PX = 1
 
 
 @dataclass
@@ -92,8 +97,13 @@ class BandShift:
     null_dy: int = 0
     null_score: float = 0.0
     min_dx: int = 1
+    tolerance: float = 0.0   # the alignment tolerance (px): a top edge moved less than this has not moved
     maps: np.ndarray | None = field(default=None, repr=False)
     bed_to_image: np.ndarray | None = field(default=None, repr=False)
+    # (2 reach_y + 1,) the score of the band's top raised or lowered by every dy = index - reach_y (0 at dy 0),
+    # and the (2,) image px per mm of height at the part: the pooled null (one height error in every view)
+    null_scores: np.ndarray | None = field(default=None, repr=False)
+    height_to_image: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def confirmed(self) -> float:
@@ -174,7 +184,8 @@ class LayerShift:
 
 def band_shift(observed: np.ndarray, bed: np.ndarray, before: np.ndarray, band: np.ndarray,
                reach_x: int, reach_y: int, min_dx: int, tolerance: float,
-               undecided: np.ndarray | None = None, bed_to_image: np.ndarray | None = None) -> BandShift | None:
+               undecided: np.ndarray | None = None, bed_to_image: np.ndarray | None = None,
+               height_to_image: np.ndarray | None = None) -> BandShift | None:
     """Test every image shift of the newest band against what is seen (module docstring).
 
     All masks (h, w) bool, already aligned: ``observed`` material, ``bed`` confidently empty bed
@@ -195,7 +206,7 @@ def band_shift(observed: np.ndarray, bed: np.ndarray, before: np.ndarray, band: 
     if not band.any() or reach_x < 1 or min_dx > reach_x:
         return None
     evidence = _Evidence.of(observed, bed, before | band, tolerance)
-    null_dy, null_score = _vertical_null(evidence, before, band, reach_y)
+    null_dy, null_score, null_scores = _vertical_null(evidence, before, band, reach_y)
     maps = _band_shift_maps(evidence, before, band, reach_x, reach_y, undecided, tolerance)
     support, against, moved = maps[:3]
     dys, dxs = np.mgrid[-reach_y: reach_y + 1, -reach_x: reach_x + 1]
@@ -203,8 +214,10 @@ def band_shift(observed: np.ndarray, bed: np.ndarray, before: np.ndarray, band: 
     iy, ix = np.unravel_index(int(np.argmax(score)), score.shape)
     return BandShift(dx=int(dxs[iy, ix]), dy=int(dys[iy, ix]), support=int(round(float(support[iy, ix]))),
                      against=int(round(float(against[iy, ix]))), moved=int(round(float(moved[iy, ix]))),
-                     null_dy=null_dy, null_score=null_score, min_dx=int(min_dx), maps=maps,
-                     bed_to_image=None if bed_to_image is None else np.asarray(bed_to_image, float))
+                     null_dy=null_dy, null_score=null_score, min_dx=int(min_dx), tolerance=float(tolerance),
+                     maps=maps, bed_to_image=None if bed_to_image is None else np.asarray(bed_to_image, float),
+                     null_scores=null_scores,
+                     height_to_image=None if height_to_image is None else np.asarray(height_to_image, float))
 
 
 @dataclass
@@ -234,15 +247,18 @@ def stretched(band: np.ndarray, dy: int) -> np.ndarray:
     return band
 
 
-def _vertical_null(evidence: _Evidence, before: np.ndarray, band: np.ndarray, reach_y: int) -> tuple[int, float]:
-    """(dy, score): the top of the band raised (dy < 0) or lowered as the image supports best, scored
-    like a shift (support - 2 x against); (0, 0.0) when no change is supported."""
+def _vertical_null(evidence: _Evidence, before: np.ndarray, band: np.ndarray,
+                   reach_y: int) -> tuple[int, float, np.ndarray]:
+    """(dy, score, scores): the top of the band raised (dy < 0) or lowered as the image supports best, scored
+    like a shift (support - 2 x against; (0, 0.0) when no change is supported), and (2 reach_y + 1,) the
+    score of every dy = index - reach_y."""
     y0, y1, x0, x1 = bounding_box(band)
     # only the band's columns and the rows it can reach change: work on that window
     window = (slice(max(0, y0 - reach_y - 1), min(band.shape[0], y1 + reach_y + 1)), slice(x0, x1))
     band_w, before_w, ring = band[window], before[window], evidence.ring[window]
     seen, empty = evidence.seen[window], evidence.empty[window]
     best, best_dy = 0.0, 0
+    scores = np.zeros(2 * reach_y + 1, np.float32)
     for dy in range(-reach_y, reach_y + 1):
         if dy == 0:
             continue
@@ -251,9 +267,10 @@ def _vertical_null(evidence: _Evidence, before: np.ndarray, band: np.ndarray, re
         lost = changed & band_w
         score = (np.count_nonzero(gained & seen) + np.count_nonzero(lost & empty)
                  - 2.0 * (np.count_nonzero(gained & empty) + np.count_nonzero(lost & seen)))
+        scores[dy + reach_y] = score
         if score > best:
             best, best_dy = score, dy
-    return best_dy, float(best)
+    return best_dy, float(best), scores
 
 
 def _band_shift_maps(evidence: _Evidence, before: np.ndarray, band: np.ndarray, reach_x: int, reach_y: int,
@@ -335,6 +352,7 @@ def _pooled(views: Mapping[str, BandShift], grid: np.ndarray) -> LayerShift | No
     null = np.zeros(len(grid), np.float64)
     clear = np.zeros(len(grid), bool)          # the shift shows clearly in at least one camera
     shows, directions, moved_by = {}, {}, {}
+    heights = {}    # per camera: (weight per shift, its null scores, image y px per mm of height)
     for name, view in views.items():
         if view.maps is None or view.bed_to_image is None:
             continue
@@ -346,19 +364,30 @@ def _pooled(views: Mapping[str, BandShift], grid: np.ndarray) -> LayerShift | No
         ix = image[:, 0] + reach_x
         iy = image[:, 1] + reach_y
         ok = (ix >= 0) & (ix < nx) & (iy >= 0) & (iy < ny)
-        # A camera counts in full where the shift shows sideways by its min_dx, not at all below half of
+        # A camera counts in full where the shift shows by its min_dx, not at all below half of
         # that (little but the outline's own wobble changes there), and in proportion between: a hard
         # gate would let a shift hide from a camera that sees the band in place by staying a pixel under it.
-        weight = np.clip((np.abs(image[:, 0]) - 0.5 * view.min_dx) / (0.5 * view.min_dx), 0.0, 1.0) * ok
+        # A shift shows by its whole image move (seventh session): sideways, and vertically beyond the alignment
+        # tolerance (a top edge that close to where it is expected has not moved). A vertical move alone is also
+        # what a part standing taller or lower shows: the pooled null below (one height error in every view,
+        # _height_null) weighs it, and a shift along the lines of sight of cameras on different sides, its top
+        # moving up in one view and down in another, fits no height error.
+        shown = np.hypot(image[:, 0], np.maximum(np.abs(image[:, 1]) - view.tolerance, 0.0))
+        weight = np.clip((shown - 0.5 * view.min_dx) / (0.5 * view.min_dx), 0.0, 1.0) * ok
         values = np.zeros((5, len(grid)))
         values[:, ok] = view.maps[:, iy[ok], ix[ok]]
         moved_by[name] = values[2] * weight
         total += values * weight
-        null += view.null_score * weight
+        if view.null_scores is not None and view.height_to_image is not None:
+            heights[name] = (weight, view.null_scores, float(view.height_to_image[1]))
+        else:
+            null += view.null_score * weight
         clear |= weight >= 1.0
-        shows[name] = (ok & (np.abs(image[:, 0]) >= view.min_dx), image)
+        shows[name] = (ok & (shown >= view.min_dx), image)
     if not shows:
         return None
+    if heights:
+        null += _height_null(heights)
     score = total[0] - 2.0 * total[1]
     score[(total[2] <= 0) | ~clear] = -np.inf
     best = int(np.argmax(score))
@@ -372,6 +401,31 @@ def _pooled(views: Mapping[str, BandShift], grid: np.ndarray) -> LayerShift | No
                       moved_sure=int(round(total[4, best])),
                       viewpoints=count_viewpoints({name: directions[name] for name in cameras}, share,
                                              VIEWPOINT_MIN_SHARE * float(total[2, best])))
+
+
+def _height_null(cameras: Mapping[str, tuple[np.ndarray, np.ndarray, float]]) -> np.ndarray:
+    """(n,) the pooled null of :func:`_pooled`'s n shifts: the best score of one height error (the part standing
+    taller or lower by the same millimetres in every view) summed over the cameras, each weighted as in the
+    pooling. ``cameras``: {name: ((n,) weight, (2 r + 1,) the band's top moved by dy = index - r scored, image y
+    px per mm of height)}. A camera may read its top HEIGHT_NULL_TOLERANCE_PX off (its calibration residual).
+    With one camera this is its own best null; cameras on opposite sides of a shift along their line of sight
+    see its top move up in one and down in the other, which no single height explains."""
+    rise = max(abs(k) for _, _, k in cameras.values())
+    reach = max(len(scores) // 2 for _, scores, _ in cameras.values())
+    # heights half a pixel apart in the camera that sees them move most, over its whole reach
+    heights = np.arange(-reach, reach + 1e-9, 0.5) / max(rise, 1e-6)
+    weights, scores_at = [], []
+    for weight, scores, k in cameras.values():
+        r = len(scores) // 2
+        tolerant = scores.astype(np.float64)
+        for e in range(1, HEIGHT_NULL_TOLERANCE_PX + 1):
+            tolerant = np.maximum(tolerant, np.maximum(np.r_[scores[e:], np.full(e, -np.inf)],
+                                                       np.r_[np.full(e, -np.inf), scores[:-e]]))
+        dy = np.rint(heights * k).astype(int)
+        scores_at.append(np.where(np.abs(dy) <= r, tolerant[np.clip(dy + r, 0, 2 * r)], 0.0))
+        weights.append(weight)
+    pooled = np.stack(weights, axis=1) @ np.stack(scores_at, axis=0)      # (n, heights)
+    return np.maximum(pooled.max(axis=1), 0.0)
 
 
 def count_viewpoints(directions: Mapping[str, float], moved_by: Mapping[str, float] | None = None,

@@ -26,6 +26,7 @@ from .settings import DetectionSettings
 from .layer_shift import (BandShift, LayerShift, confirms_layer_shift, describe_layer_shift, estimate_layer_shift,
                           with_history)
 from .shape_check import ExpectedRegions, ShapeResult, check_shape, not_decisive_where_calibrated
+from .nest import NEST_MAX_COVERAGE, SOLID_MIN_COVERAGE, STALL_READ_BELOW_GROWTH_PCT
 from .tangle import loose_material
 
 VERDICTS = ("ok", "fail", "unknown")
@@ -139,12 +140,13 @@ class JobPlan:
         # let brims merged with skirts through as "extra": it stays off until it is done better.)
         centre = self.footprint.mean(axis=0)
         at_part = cam.project(np.array([[centre[0], centre[1], z], [centre[0] + 1.0, centre[1], z],
-                                        [centre[0], centre[1] + 1.0, z]]))
+                                        [centre[0], centre[1] + 1.0, z], [centre[0], centre[1], z + 1.0]]))
         bed_to_image = np.stack([at_part[1] - at_part[0], at_part[2] - at_part[0]], axis=1)
         return ExpectedRegions(silhouette=silhouette, new_band=band, search=search, dont_care=dont_care,
                                max_shift_px=self.max_shift_px[camera], tolerance_px=self.tolerance_px[camera],
                                px_per_mm=self.px_per_mm.get(camera, 0.0), previous_silhouette=before,
-                               reflection=reflection, bed_to_image=bed_to_image, camera=cam,
+                               reflection=reflection, bed_to_image=bed_to_image,
+                               height_to_image=at_part[3] - at_part[0], camera=cam,
                                height_mm=float(z))
 
 
@@ -385,9 +387,27 @@ def layer_shift_of(shape: Mapping[str, ShapeResult],
                         history)
 
 
+def unseen_by_partner(result: ShapeResult, usable: Mapping[str, ShapeResult], pairs: Sequence[Sequence[str]],
+                      extra_before: float | None) -> bool:
+    """True when ``result`` fails on extra material alone (not decisive, less than a third of the threshold
+    missing, no newest-band failure) that appeared at once (under a third of the threshold at the camera's
+    previous check, ``extra_before``; never when it had none) while the other camera of one of its
+    stereo ``pairs`` ([left, right] names) is ``usable``, passes and sees no extra material at all (every
+    usable partner, where a camera belongs to several pairs)."""
+    if (result.passed or result.decisive or result.missing_pct >= result.threshold / 3.0
+            or (result.band_error_pct is not None and result.band_error_pct > result.band_threshold)
+            or extra_before is None or extra_before >= result.threshold / 3.0):
+        return False
+    names = [b if a == result.camera else a for a, b in pairs if result.camera in (a, b)]
+    partners = [usable[name] for name in names if name in usable]
+    return bool(partners) and all(p.passed and p.extra_pct == 0.0 for p in partners)
+
+
 def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings: DetectionSettings,
            unreadable: Mapping[str, str] | Sequence[str] = (), *,
-           layer_shift: LayerShift | None = None, top_closing: bool = False) -> tuple[str, list[str]]:
+           layer_shift: LayerShift | None = None, top_closing: bool = False,
+           pairs: Sequence[Sequence[str]] = (),
+           extra_before: Mapping[str, float] | None = None) -> tuple[str, list[str]]:
     """The combined decision rule -> (verdict, reasons).
 
     * A camera counts only when it gave a frame and its background still matches the bed
@@ -395,7 +415,10 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     * fail when at least half of the usable cameras (and at least ``min_failing_cameras``) fail
       their shape check (Eq. 4.1 with tolerance over its threshold, or the newest band over the
       band threshold), or when one camera fails decisively (missing AND extra material, or the whole
-      part found elsewhere: the part moved; extra material four times the threshold),
+      part found elsewhere: the part moved; extra material four times the threshold); extra material
+      alone that appeared at once (``extra_before``: each camera's extra at its previous check) in one
+      camera of a stereo pair (``pairs``) whose partner passes and sees none does not count
+      (:func:`unseen_by_partner`),
     * while the part visibly grows (median growth >= 50 %), a camera failing on missing material
       alone does not count (a face the colour of what lies behind it looks missing); nor does missing
       material alone from no more than half of the usable cameras unless the part stalled, nor from a
@@ -408,7 +431,10 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       -15 %, a sunk outline, left out) is below ``min_growth_pct`` of the expected rise; or, unless a
       top surface closes, when two or more cameras measured growth, its median is under 50 % and two views
       that saw under 50 % each miss 15 % of the newest band (strands piling on a stopped part lift the
-      outline a little but fill no band),
+      outline a little but fill no band); or, unless a top surface closes, when the median is under
+      ``min_growth_pct`` and a view that saw no rise (or could not measure one) shows its newest band less
+      than half covered by the part's colours where its band read solid (80 %) at an earlier check
+      (``ShapeResult.band_part_coverage``, core/nest.py: a nest of strands over a stopped part),
       or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
       abstains reports no ``error_pct`` and never fails);
     * or when the cameras together confirm that the newest layers sit sideways on the older ones
@@ -455,6 +481,17 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
                     if r.growth_pct < 50.0 and (r.band_missing_pct or 0.0) >= 15.0]
     stalled = stalled or (not top_closing and len(growth) >= 2 and float(np.median(growth)) < 50.0
                           and len(slowed_views) >= 2)
+    # A part that stopped under a nest of strands (spaghetti) reads no missing material: the pile fills its
+    # outline. But its newest band, in the part's colours, is then a mesh of strands over the bed or the bed
+    # itself: less than half covered by the part's material, in a view whose band read solid before (a face
+    # in the bed's colour reads bare at every check) and that saw no rise or could not measure one. Not where a
+    # top surface closes (a smooth top skin may look like the bed).
+    bare_band = [r for r in usable.values()
+                 if (r.growth_pct is None or r.growth_pct < settings.min_growth_pct)
+                 and r.band_part_coverage is not None and r.band_part_coverage < NEST_MAX_COVERAGE
+                 and (r.band_coverage_before or 0.0) >= SOLID_MIN_COVERAGE]
+    stalled = stalled or (not top_closing and bool(growth) and float(np.median(growth)) < settings.min_growth_pct
+                          and bool(bare_band))
     size_fail, size_usable = [], 0
     for key, entry in size.items():
         error = entry.get("error_pct") if isinstance(entry, Mapping) else None
@@ -498,6 +535,14 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
         # The part's outline rises as the model says: "material missing" without any extra material
         # is then a face the camera cannot tell from what lies behind it, not a runout.
         failing = [r for r in failing if r.decisive or r.extra_pct * 2.0 > r.missing_pct]
+    # Extra material alone that appeared at once in one camera of a stereo pair whose partner, looking from
+    # nearly the same side, sees none at all (and passes) is not standing there: a hair of stringing (18 %
+    # "extra" in one view of a pair, 0 in the other; docs/detection-shadows.md). Material new since the
+    # previous check is the tangle rule's to judge (two views). Extra material that built up check by check
+    # (a layer shift along the pair's line of sight) still counts; so does a decisive view (a detached part
+    # is sometimes seen by one camera of a pair only), and a pair with one usable camera is a single view.
+    extra_before = extra_before or {}
+    failing = [r for r in failing if not unseen_by_partner(r, usable, pairs, extra_before.get(r.camera))]
     shape_fail = bool(decisive) or len(failing) >= needed
     fail_reasons = [reason for r in (failing if shape_fail else []) for reason in r.reasons]
     if stalled:
@@ -505,6 +550,11 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
                             f"{float(np.median(growth)):.0f}% of the expected rise seen "
                             f"(median of {len(growth)} camera(s), limit {settings.min_growth_pct:g}%): "
                             f"runout, clog or a stopped print?")
+        if not top_closing:
+            fail_reasons.extend(f"{r.camera}: the newest layers show the part's colours over "
+                                f"{100.0 * r.band_part_coverage:.0f}% of their area "
+                                f"({100.0 * r.band_coverage_before:.0f}% at an earlier check): "
+                                f"strands or bare bed where the part should be" for r in bare_band)
     if layer_shift is not None and confirms_layer_shift(layer_shift, settings.layer_shift_mm):
         fail_reasons.append(describe_layer_shift(layer_shift))
         shape_fail = True
@@ -546,10 +596,16 @@ class CheckRunner:
         # the height each camera's last_observed was seen at (the growth test needs the previous check's)
         self.last_observed_z: dict[str, float] = {}
         self.previous_z: float | None = None
+        # per camera: the growth it read at its last usable check (None: it could not measure one)
+        self.last_growth: dict[str, float | None] = {}
+        # per camera: its extra material at the previous check, where it was usable there
+        self.last_extra: dict[str, float] = {}
         self.keep_pictures = True
         self.size_checks: dict = {}  # "left+right" -> stereo.PairSizeCheck, kept for the whole print
         # the last four checks' layer-shift evidence: (had a check before it, {camera: BandShift})
         self.band_shift_history: list[tuple[bool, dict]] = []
+        # per camera: the highest share of its newest band covered by the part's material so far (core/nest.py)
+        self.band_coverage_before: dict[str, float] = {}
 
     def run_check(self, layer: int, z: float, frames: Mapping[str, np.ndarray | None]) -> CheckResult:
         """Shape check per camera (size per pair once wired in) and the combined verdict."""
@@ -565,6 +621,8 @@ class CheckRunner:
         errors: dict[str, float | None] = {}
         unreadable: dict[str, str] = {}
         shape_inputs: dict[str, dict] = {}
+        growth_before = dict(self.last_growth)
+        extra_before = dict(self.last_extra)
         for name in self.plan.cameras:
             frame = frames.get(name)
             background = self.backgrounds.get(name)
@@ -593,6 +651,9 @@ class CheckRunner:
                 max_drift=1 if name in self.frozen else 2,
                 palette=self.palettes.get(name),
                 keep_pictures=self.keep_pictures,
+                # once its band read solid, a camera's band coverage is read only where the part stalls
+                band_coverage_wanted=(self.band_coverage_before.get(name, 0.0) < SOLID_MIN_COVERAGE
+                                      or settings.min_growth_pct >= STALL_READ_BELOW_GROWTH_PCT),
             )
             result = check_shape(**shape_args, candidates=self.shift_candidates.get(name), track_candidates=True)
             result = not_decisive_where_calibrated(result, shape_args)
@@ -602,6 +663,7 @@ class CheckRunner:
             if result.usable:
                 self.last_observed[name] = result.observed_mask
                 self.last_observed_z[name] = z
+                self.last_growth[name] = result.growth_pct
             if result.palette is not None and result.usable and result.passed:
                 self.palettes[name] = result.palette
             if result.usable and result.passed and result.shift_candidates is not None \
@@ -620,10 +682,16 @@ class CheckRunner:
         failing = [name for name, r in shape.items() if r.usable and not r.passed]
         if len(failing) == 1:
             name = failing[0]
-            second = self._second_look(name, shape[name], shape_inputs[name], missing=True)
+            second = self._second_look(name, shape[name], shape_inputs[name], missing=True,
+                                       growth_before=growth_before.get(name))
             if second is not None:
                 shape[name] = second
                 errors[name] = second.error_pct
+        for name, r in shape.items():
+            # how solid this camera's newest band looked before (decide: a stall under a nest of strands)
+            r.band_coverage_before = self.band_coverage_before.get(name)
+            if r.usable and not r.first_look and r.band_part_coverage is not None:
+                self.band_coverage_before[name] = max(r.band_part_coverage, self.band_coverage_before.get(name, 0.0))
         shape_seconds = time.perf_counter() - started
         shape_cpu_seconds = time.process_time() - cpu_started
         size = self._size_check(z, frames, shape)
@@ -632,7 +700,8 @@ class CheckRunner:
         self.band_shift_history = [*self.band_shift_history, (self.previous_z is not None, band_shifts)][-4:]
         top_closing = self.plan.top_closing(z)
         verdict, reasons = decide(shape, size, settings, unreadable, layer_shift=layer_shift,
-                                  top_closing=top_closing)
+                                  top_closing=top_closing, pairs=self.plan.pairs, extra_before=extra_before)
+        self.last_extra = {name: r.extra_pct for name, r in shape.items() if r.usable}
         self.previous_z = z
         return CheckResult(layer=int(layer), z=float(z), verdict=verdict, shape_error_pct=errors, shape=shape,
                            size=size, reasons=reasons, seconds=time.perf_counter() - started,
@@ -640,7 +709,7 @@ class CheckRunner:
                            shape_cpu_seconds=shape_cpu_seconds, top_closing=top_closing)
 
     def _second_look(self, name: str, result: ShapeResult, shape_args: dict,
-                     missing: bool = False) -> ShapeResult | None:
+                     missing: bool = False, growth_before: float | None = None) -> ShapeResult | None:
         """The camera's check again at the best of the shifts earlier checks could not tell apart, when it
         failed in a way a misplaced outline explains and nothing moved; the new result if it passes
         clearly, else None.
@@ -650,8 +719,10 @@ class CheckRunner:
         several pixels off; a later check then shows the part's side beyond the outline as "extra", or the
         bed beside it as "missing". Only those failures get a second look: extra material alone
         (``missing`` False), or missing material alone (``missing`` True: the caller asks only when no other
-        camera fails, since a detached or stopped part is missed by several views) in a view that does
-        not see the part stall (a runout stops the rise); not decisive, no newest-band failure, the
+        camera fails, since a detached or stopped part is missed by several views) in a view that did not
+        see the part slow (growth under 50 %) at this check nor at its previous one (``growth_before``: a
+        runout or a part knocked away stops the rise, and with one usable camera nothing else can tell);
+        not decisive, no newest-band failure, the
         material seen at the previous check (``shape_args["last_observed"]``) still seen (a part that slid or was knocked off
         is not in place), the shift among those no passing check could tell apart, and the check passing
         there with half the threshold to spare. It changes nothing kept for later checks (anchor,
@@ -660,7 +731,7 @@ class CheckRunner:
         threshold = self.settings.threshold_for(name)
         if missing:
             shape_fits = (result.extra_pct < threshold / 3.0 <= result.missing_pct
-                          and (result.growth_pct is None or result.growth_pct >= 50.0))
+                          and all(growth is None or growth >= 50.0 for growth in (result.growth_pct, growth_before)))
         else:
             shape_fits = result.missing_pct < threshold / 3.0
         if (not shape_fits or not result.usable or result.passed or result.decisive or result.best_candidate is None

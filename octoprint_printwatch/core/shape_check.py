@@ -41,6 +41,7 @@ import numpy as np
 from .camera import Camera
 from .layer_shift import BandShift, band_shift
 from .tangle import NewMaterial, new_material
+from .nest import STALL_READ_BELOW_GROWTH_PCT, part_coverage
 from .shadows import shade_of_clipped_bed, shadow_left
 from .masks import (around, bounding_box, dilate, disk, erode, outline_zone,  # noqa: F401  (re-exported)
                     reaching_in_from_above, shift_mask, crossing_the_box, mirror_match, MIRROR_MATCH_SHARE,
@@ -80,6 +81,7 @@ class ExpectedRegions:
     reflection : (h, w) bool or None, the part's mirror image below the bed (any thickness is ignored there).
     bed_to_image : (2, 2) image px per mm of printer X (column 0) and Y (column 1) at the part's centre at
         this height, or None: how a layer shift on the bed moves in this image.
+    height_to_image : (2,) image px per mm of height there, or None: how a part standing taller moves its top.
     """
 
     silhouette: np.ndarray
@@ -93,6 +95,7 @@ class ExpectedRegions:
     flat_max_px: float = 1e9   # thickest blob (px) that can still be a flat mark on the bed
     reflection: np.ndarray | None = None   # where the part's mirror image in a glossy bed can appear
     bed_to_image: np.ndarray | None = None   # (2, 2) image px per printer X/Y mm at the part (layer-shift test)
+    height_to_image: np.ndarray | None = None   # (2,) image px per mm of height at the part (layer-shift test)
     camera: Camera | None = None   # the calibrated camera of this image (reflections of things above), or None
     height_mm: float = 0.0   # the check height: the nozzle, and what hangs with it, is never lower
 
@@ -162,6 +165,12 @@ class ShapeResult:
     #: (:func:`differs_as_a_group`); measured only when the camera fails on missing material alone, else None
     background_missing_pct: float | None = None
     background_band_missing_pct: float | None = None
+    #: mean share of the newest band's pixels covered by the part's material (core/nest.py: 1 a solid part,
+    #: about 0.5 a mesh of strands, 0 the bed); None when the band figures are not measured or no palette
+    band_part_coverage: float | None = None
+    #: the highest ``band_part_coverage`` this camera read at its earlier checks (its first look left out: its
+    #: band is the whole part); set by pipeline.CheckRunner, None before any
+    band_coverage_before: float | None = None
     # pieces the overlay is drawn from (kept so the picture costs nothing unless asked for)
     _frame: np.ndarray | None = field(default=None, repr=False)
     _expected: np.ndarray | None = field(default=None, repr=False)
@@ -863,6 +872,7 @@ def check_shape(
     keep_pictures: bool = True,
     candidates: np.ndarray | None = None,
     track_candidates: bool = False,
+    band_coverage_wanted: bool = True,
 ) -> ShapeResult:
     """Shape check of one camera (module docstring). Images (h, w, 3) uint8 BGR of the camera's size.
 
@@ -872,6 +882,8 @@ def check_shape(
     ``measure_growth``: when it is the previous check's, whose expected silhouette it is compared with).
     ``layer_shift_mm`` is the smallest shift the layer-shift test looks for (its per-camera evidence,
     ``band_shift``, is pooled over the cameras by ``core.layer_shift.estimate_layer_shift``).
+    ``band_coverage_wanted`` False measures the newest band's part coverage (core/nest.py) only where the
+    part did not visibly grow: the caller has seen this camera's band solid, and only a stalled part's is read.
     """
     h, w = regions.silhouette.shape
     if frame.shape[:2] != (h, w):
@@ -992,10 +1004,12 @@ def check_shape(
     extra_pct = 100.0 * int(comparison.extra.sum()) / n
     error_pct = missing_pct + extra_pct
     raw_error_pct = 100.0 * comparison.raw_diff_pixels / n
-    band_error = band_missing = shifted_band = None
+    band_error = band_missing = shifted_band = band_coverage = None
     if comparison.band_core_pixels >= band_min_pixels:
         band_missing = 100.0 * comparison.band_missing / comparison.band_pixels
         band_error = 100.0 * (comparison.band_missing + comparison.band_extra) / comparison.band_pixels
+        if band_coverage_wanted or growth_pct is None or growth_pct < STALL_READ_BELOW_GROWTH_PCT:
+            band_coverage = part_coverage(frame[crop], evidence.background_norm, band_a & core, palette_used)
         if regions.px_per_mm > 0:
             reach = int(np.ceil(8.0 * regions.px_per_mm))
             before_band = (shift_mask(regions.previous_silhouette[crop].astype(bool), dx, dy)
@@ -1003,7 +1017,7 @@ def check_shape(
             shifted_band = band_shift(observed, bed_evidence, before_band, band_a, reach, reach // 2,
                                       int(np.ceil(layer_shift_mm * regions.px_per_mm)), tol,
                                       undecided=dont_care_a if reflection_a is None else dont_care_a | reflection_a,
-                                      bed_to_image=regions.bed_to_image)
+                                      bed_to_image=regions.bed_to_image, height_to_image=regions.height_to_image)
 
     # A part knocked off its place: most of the outline is empty, and the whole part stands elsewhere
     # (perhaps inside the bed-marks zone, where it would otherwise pass for a brim). Searched up to
@@ -1080,6 +1094,7 @@ def check_shape(
         decisive=decisive, shift_candidates=shift_candidates, best_candidate=best_candidate,
         new_outside=new_outside, moved_px=moved_px, first_look=last_observed is None,
         background_missing_pct=background_missing_pct, background_band_missing_pct=background_band_missing_pct,
+        band_part_coverage=band_coverage,
     )
     if keep_pictures:
         full = np.zeros((h, w), bool)
