@@ -37,12 +37,12 @@ from benchmarks.crosscheck.scenes import KINDS, Recipe, generate, plan_kinds  # 
 
 
 def _generate_one(args) -> tuple[str, float, str | None]:
-    folder, seed, kind = args
+    folder, seed, kind, calibration_error = args
     if os.getpid() != _MAIN_PID:
         os.nice(10)
     t = time.time()
     try:
-        generate(Path(folder), Recipe(seed=seed, kind=kind))
+        generate(Path(folder), Recipe(seed=seed, kind=kind, calibration_error=calibration_error))
         return folder, time.time() - t, None
     except Exception:  # a generator bug must not stop the run: it is reported
         return folder, time.time() - t, traceback.format_exc(limit=3)
@@ -211,6 +211,8 @@ def main(argv=None) -> int:
     ap.add_argument("--out", required=True, type=Path, help="folder of recordings (created; reused)")
     ap.add_argument("--count", type=int, default=60, help="recordings: a third normal, the rest four failure kinds")
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--calibration-error", type=float, default=1.0, metavar="SCALE",
+                    help="scale of the stated calibration's error (1 = 0.3 deg, 0.6 mm, 1 %% focal, 1.5 px per axis)")
     ap.add_argument("--jobs", type=int, default=1, help="processes for generation and evaluation (niced)")
     ap.add_argument("--json", type=Path, help="write every recording's scores and per-check figures here")
     ap.add_argument("--only", help="comma-separated recording names (or name prefixes) to evaluate")
@@ -240,7 +242,7 @@ def main(argv=None) -> int:
         names.append(name)
         folder = args.out / name
         if not (folder / "truth.json").exists() and not args.sheet:
-            todo.append((str(folder), args.seed * 100000 + i, kind))
+            todo.append((str(folder), args.seed * 100000 + i, kind, args.calibration_error))
     t0 = time.time()
     gen_times = []
     if todo:

@@ -399,6 +399,7 @@ class Recipe:
     supersample: int = 2
     max_checks_after_flag: int = 4
     quick: bool = False          # tests: tiny frames, one camera
+    calibration_error: float = 1.0   # scales every stated-calibration error (same draws, same order)
 
 
 @dataclass
@@ -483,7 +484,7 @@ def generate(out: Path, recipe: Recipe) -> dict:
     cams, pairs, rig = random_rig(rng, centre, half, scene.part_info["height_mm"], size)
     if recipe.quick:
         cams, pairs = cams[:1], []
-    stated = {c.name: with_calibration_error(rng, c) for c in cams}
+    stated = {c.name: with_calibration_error(rng, c, recipe.calibration_error) for c in cams}
     sensors = {c.name: random_sensor(rng) for c in cams}
     auto_exposure = {c.name: bool(rng.random() < 0.7) for c in cams}
 
@@ -700,7 +701,8 @@ def generate(out: Path, recipe: Recipe) -> dict:
         "detach": scene.detach_pose,
         "part": {**scene.part_info, "centre": [round(float(v), 1) for v in centre], "layers": scene.n_layers},
         "every": scene.every,
-        "look": {"filament": scene.look["filament"], "filament_linear": [round(float(v), 3) for v in colour],
+        "look": {"filament": scene.look["filament"], "calibration_error": recipe.calibration_error,
+                 "filament_linear": [round(float(v), 3) for v in colour],
                  "bed": bed_kind, "light_elevation_deg": round(float(np.degrees(el)), 1),
                  "ambient": round(ambient, 2), "jpeg_quality": jpeg_quality, "park": list(park),
                  "gantry": gantry, "skirt": bool(skirt), "brim": bool(brim), "stringing": stringing,

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -573,6 +573,30 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
 
 
 # ------------------------------------------------------------------ running
+#: How far a camera that sees the part displaced at its first checks may be aligned, in multiples of its
+#: stated-calibration bound, to learn a calibration error larger than the stated one (CheckRunner).
+CALIBRATION_PROBE_WIDEN = 2.5
+#: ... and the largest shift it may learn (multiples of that bound, 5 standard deviations of the stated error):
+#: a fit near the edge of the widened search may have its best beyond it, and is no calibration error.
+CALIBRATION_MAX_LEARNED = 2.0
+#: With no camera to vouch, the part must grow at the learned shift by this share of the expected rise.
+CALIBRATION_GROWTH_PCT = 50.0
+#: A learned shift is refused when one move of the part on the bed explains every camera's shift to within
+#: this share of it (CheckRunner._learn_calibration_offsets).
+MOVE_FIT_SHARE = 0.3
+
+
+def one_move_explains(views: Sequence[tuple[tuple[int, int], np.ndarray | None]], tolerance_px: float) -> bool:
+    """Whether one move (mm) of the part on the bed explains every camera's image shift to within
+    ``tolerance_px``. ``views`` are ((dx, dy) px, bed_to_image (2, 2): image motion per mm of bed x and y)."""
+    rows = [(np.asarray(shift, float), np.asarray(jac, float)) for shift, jac in views if jac is not None]
+    if len(rows) < 2:
+        return False
+    move = np.linalg.lstsq(np.vstack([jac for _, jac in rows]), np.concatenate([shift for shift, _ in rows]),
+                           rcond=None)[0]
+    return all(float(np.hypot(*(shift - jac @ move))) <= tolerance_px for shift, jac in rows)
+
+
 class CheckRunner:
     """Runs the checks of one print in order, keeping per-camera state between them."""
 
@@ -606,6 +630,13 @@ class CheckRunner:
         self.band_shift_history: list[tuple[bool, dict]] = []
         # per camera: the highest share of its newest band covered by the part's material so far (core/nest.py)
         self.band_coverage_before: dict[str, float] = {}
+        # per camera: (dx, dy) px, a calibration error larger than the stated one, learned once (see
+        # _learn_calibration_offsets); its alignment bound is widened to reach it
+        self.calibration_offsets: dict[str, tuple[int, int]] = {}
+        # per camera: a shift to confirm at the next check (no other camera vouched), and the cameras that
+        # abstained for one already (once per print)
+        self.pending_offsets: dict[str, tuple[int, int]] = {}
+        self.offset_abstained: set[str] = set()
 
     def run_check(self, layer: int, z: float, frames: Mapping[str, np.ndarray | None]) -> CheckResult:
         """Shape check per camera (size per pair once wired in) and the combined verdict."""
@@ -632,6 +663,9 @@ class CheckRunner:
                 errors[name] = None
                 continue
             regions = self.plan.regions(name, z, settings, self.previous_z)
+            if name in self.calibration_offsets:
+                regions = replace(regions, max_shift_px=regions.max_shift_px
+                                  + float(np.hypot(*self.calibration_offsets[name])))
             shape_args = dict(
                 camera=name, background=background, frame=frame, regions=regions,
                 threshold=settings.threshold_for(name),
@@ -678,6 +712,7 @@ class CheckRunner:
                     self.anchors[name] = result.shift_px
                     if _silhouette_rows(regions.silhouette) >= 2 * regions.max_shift_px:
                         self.frozen.add(name)
+        self._learn_calibration_offsets(z, shape, shape_inputs, errors)
         # missing material alone gets its second look only from a camera no other camera corroborates
         failing = [name for name, r in shape.items() if r.usable and not r.passed]
         if len(failing) == 1:
@@ -743,6 +778,83 @@ class CheckRunner:
         if second.usable and second.passed and second.error_pct <= threshold / 2.0:
             return second
         return None
+
+    def _learn_calibration_offsets(self, z: float, shape: dict[str, ShapeResult], shape_inputs: dict[str, dict],
+                                   errors: dict[str, float | None]) -> None:
+        """Learn a camera's calibration error when it is larger than the stated one (updates ``shape``).
+
+        A camera that has never passed a check and fails is checked again with its alignment bound widened
+        (``CALIBRATION_PROBE_WIDEN`` times; the part partly outside the reach of its outline reads as missing
+        material). When the part then fits, beyond the ordinary bound but within ``CALIBRATION_MAX_LEARNED``
+        times it, with half the threshold and half the error to spare, the camera's calibration is off by that
+        shift, or the part was knocked off before the camera's first check. It is the calibration when another
+        camera passes this check with the part where its calibration puts it and no single move of the part
+        on the bed explains every camera's shift; with no camera to vouch, when the part, seen there at the
+        next check, grew there as the model says (a knocked-off part does not grow). Until then the camera
+        abstains, once per print, with the reason. A learned shift becomes the camera's anchor for the rest
+        of the print (frozen) and its bound is widened to reach it."""
+        in_place = [name for name, r in shape.items()
+                    if r.usable and r.passed and name not in self.calibration_offsets
+                    and float(np.hypot(*r.shift_px)) <= shape_inputs[name]["regions"].max_shift_px]
+        for name, result in list(shape.items()):
+            if name in self.anchors or name in self.calibration_offsets or not result.usable or result.passed:
+                continue
+            pending = self.pending_offsets.pop(name, None)
+            vouching = [other for other in in_place if other != name]
+            if not vouching and pending is None and name in self.offset_abstained:
+                continue
+            args = shape_inputs[name]
+            bound = float(args["regions"].max_shift_px)
+            wide = replace(args["regions"], max_shift_px=bound * CALIBRATION_PROBE_WIDEN)
+            probe = check_shape(**dict(args, regions=wide, anchor=None, max_drift=2))
+            offset = float(np.hypot(*probe.shift_px))
+            # the part must fit there clearly better, not merely pass: a shorter part (a runout) slid down
+            # the outline trades missing material at the top for missing material at the foot
+            if not (probe.usable and probe.passed and bound < offset <= CALIBRATION_MAX_LEARNED * bound
+                    and probe.error_pct <= probe.threshold / 2.0 and probe.error_pct <= result.error_pct / 2.0):
+                continue
+            where = (f"{name}: the part appears {offset:.0f} px from where the calibration puts it "
+                     f"({probe.shift_px[0]:+d}, {probe.shift_px[1]:+d} px; the stated calibration error allows "
+                     f"{bound:.0f} px)")
+            if vouching:
+                # a part knocked off before this camera's first check moves every camera's view as one move on
+                # the bed would; independent calibration errors do not (a camera looking along such a move
+                # sees little of it: then nothing is learned either)
+                views = [(probe.shift_px, args["regions"].bed_to_image)] + [
+                    (shape[other].shift_px, shape_inputs[other]["regions"].bed_to_image) for other in vouching]
+                if one_move_explains(views, max(2.0 * float(args["regions"].tolerance_px) + 1.0,
+                                                MOVE_FIT_SHARE * offset)):
+                    continue
+                why = f"while {', '.join(vouching)} see it in place"
+            elif pending is None:
+                self.pending_offsets[name] = probe.shift_px
+                self.offset_abstained.add(name)
+                self.last_observed[name] = probe.observed_mask
+                self.last_observed_z[name] = z
+                shape[name] = replace(result, usable=False, passed=True, decisive=False, reasons=[
+                    f"{where}, and no other camera sees the part in place: not judged until the next check tells "
+                    f"a calibration error (the part grows there) from a part knocked off (it does not)"])
+                errors[name] = None
+                continue
+            elif (float(np.hypot(probe.shift_px[0] - pending[0], probe.shift_px[1] - pending[1])) > 3.0
+                  or probe.growth_pct is None or probe.growth_pct < CALIBRATION_GROWTH_PCT):
+                continue
+            else:
+                why = f"at two checks, and it grew there ({probe.growth_pct:.0f} % of the expected rise)"
+            self.calibration_offsets[name] = probe.shift_px
+            self.anchors[name] = probe.shift_px
+            # held there: the alignment's prior, centred on the stated calibration, would walk it back
+            self.frozen.add(name)
+            probe.reasons.append(f"{where} {why}: this camera's calibration is off and its checks now use that "
+                                 f"shift (recalibrate it)")
+            shape[name] = probe
+            errors[name] = probe.error_pct
+            self.last_observed[name] = probe.observed_mask
+            self.last_observed_z[name] = z
+            self.previous_masks[name] = probe.observed_mask
+            self.last_growth[name] = probe.growth_pct
+            if probe.palette is not None:
+                self.palettes[name] = probe.palette
 
     def _size_check(self, z: float, frames: Mapping[str, np.ndarray | None],
                     shape: Mapping[str, ShapeResult]) -> dict[str, dict]:
