@@ -130,6 +130,9 @@ class LayerShift:
     moved_sure : of ``moved``, the pixels decided (material or bed) or beyond the alignment tolerance of the
         moved band's outline (see SHIFT_OVERHANG_SHARE).
     opposite : the evidence for the move the other way (estimate_layer_shift only; see SHIFT_OPPOSITE_MAX).
+    sides : as ``viewpoints``, but cameras on opposite sides of the part count apart.
+    vertical : whether a camera counted the shift's vertical image move too (only when cameras on two or more
+        sides see it: one side cannot tell a band moved along its line of sight from a taller part).
     """
 
     shift_mm: np.ndarray
@@ -143,6 +146,8 @@ class LayerShift:
     overhang: int = 0   # of the support, material seen where the model has none (the moved band sticking out)
     moved_sure: int = 0   # of moved, those decided or beyond the tolerance of the moved band's outline
     opposite: "LayerShift | None" = None   # the same cameras' evidence for the move the other way (-shift_mm)
+    sides: int = 1
+    vertical: bool = True
     # the same shift read in the views of the (up to four) checks before this one that tested their own
     # newest band, newest first (None: nothing there changes); see with_history
     before: list = field(default_factory=list)
@@ -327,27 +332,33 @@ def estimate_layer_shift(views: Mapping[str, BandShift], *, max_mm: float = 8.0,
     """
     steps = np.arange(-max_mm, max_mm + 1e-9, step_mm)
     gx, gy = np.meshgrid(steps, steps)
-    found = _pooled(views, np.stack([gx.ravel(), gy.ravel()], axis=1))
+    grid = np.stack([gx.ravel(), gy.ravel()], axis=1)
+    found = _pooled(views, grid)
+    if found is not None and found.sides < 2:
+        # seen from one side, a move up or down the image is also a part standing taller or lower, or that
+        # camera's calibration error (3x the stated one paused a normal print): only sideways counts there
+        found = _pooled(views, grid, vertical=False)
     if found is not None:
-        found.opposite = _pooled(views, -found.shift_mm.reshape(1, 2))
+        found.opposite = _pooled(views, -found.shift_mm.reshape(1, 2), vertical=found.vertical)
     return found
 
 
 def layer_shift_at(views: Mapping[str, BandShift], shift_mm, within_mm: float = 0.0,
-                   step_mm: float = 0.25) -> LayerShift | None:
+                   step_mm: float = 0.25, vertical: bool = True) -> LayerShift | None:
     """The cameras' best pooled evidence (as in :func:`estimate_layer_shift`) for a bed shift within
     ``within_mm`` of ``shift_mm`` ((2,) printer X/Y mm): how well another check's views confirm the
-    shift found now. None when none of them shows clearly to any camera."""
+    shift found now (read as it was found: ``vertical``). None when none of them shows clearly to any camera."""
     centre = np.asarray(shift_mm, np.float64).reshape(1, 2)
     steps = np.arange(-within_mm, within_mm + 1e-9, step_mm) if within_mm > 0 else np.zeros(1)
     gx, gy = np.meshgrid(steps, steps)
     offsets = np.stack([gx.ravel(), gy.ravel()], axis=1)
     offsets = offsets[np.hypot(offsets[:, 0], offsets[:, 1]) <= within_mm + 1e-9]
-    return _pooled(views, centre + offsets)
+    return _pooled(views, centre + offsets, vertical=vertical)
 
 
-def _pooled(views: Mapping[str, BandShift], grid: np.ndarray) -> LayerShift | None:
-    """The best of the (n, 2) bed shifts ``grid`` (mm) by the pooled score (estimate_layer_shift)."""
+def _pooled(views: Mapping[str, BandShift], grid: np.ndarray, vertical: bool = True) -> LayerShift | None:
+    """The best of the (n, 2) bed shifts ``grid`` (mm) by the pooled score (estimate_layer_shift); a camera
+    counts the shift's vertical image move beyond its tolerance too unless ``vertical`` is False."""
     total = np.zeros((5, len(grid)), np.float64)
     null = np.zeros(len(grid), np.float64)
     clear = np.zeros(len(grid), bool)          # the shift shows clearly in at least one camera
@@ -372,7 +383,8 @@ def _pooled(views: Mapping[str, BandShift], grid: np.ndarray) -> LayerShift | No
         # what a part standing taller or lower shows: the pooled null below (one height error in every view,
         # _height_null) weighs it, and a shift along the lines of sight of cameras on different sides, its top
         # moving up in one view and down in another, fits no height error.
-        shown = np.hypot(image[:, 0], np.maximum(np.abs(image[:, 1]) - view.tolerance, 0.0))
+        shown = (np.hypot(image[:, 0], np.maximum(np.abs(image[:, 1]) - view.tolerance, 0.0)) if vertical
+                 else np.abs(image[:, 0]).astype(np.float64))
         weight = np.clip((shown - 0.5 * view.min_dx) / (0.5 * view.min_dx), 0.0, 1.0) * ok
         values = np.zeros((5, len(grid)))
         values[:, ok] = view.maps[:, iy[ok], ix[ok]]
@@ -395,12 +407,14 @@ def _pooled(views: Mapping[str, BandShift], grid: np.ndarray) -> LayerShift | No
         return None
     cameras = {name: (int(image[best, 0]), int(image[best, 1])) for name, (ok, image) in shows.items() if ok[best]}
     share = {name: float(moved_by[name][best]) for name in cameras}
+    looking = {name: directions[name] for name in cameras}
+    min_share = VIEWPOINT_MIN_SHARE * float(total[2, best])
     return LayerShift(shift_mm=grid[best].copy(), support=int(round(total[0, best])),
                       against=int(round(total[1, best])), moved=int(round(total[2, best])), cameras=cameras,
                       null_score=float(null[best]), moved_by=share, overhang=int(round(total[3, best])),
                       moved_sure=int(round(total[4, best])),
-                      viewpoints=count_viewpoints({name: directions[name] for name in cameras}, share,
-                                             VIEWPOINT_MIN_SHARE * float(total[2, best])))
+                      viewpoints=count_viewpoints(looking, share, min_share),
+                      sides=count_viewpoints(looking, share, min_share, period=2 * np.pi), vertical=vertical)
 
 
 def _height_null(cameras: Mapping[str, tuple[np.ndarray, np.ndarray, float]]) -> np.ndarray:
@@ -463,7 +477,7 @@ def with_history(shift: LayerShift | None,
     for tested, views in reversed(list(history[-4:])):
         if not (tested and views):
             break
-        shift.before.append(layer_shift_at(views, shift.shift_mm, SHIFT_PERSISTS_WITHIN_MM))
+        shift.before.append(layer_shift_at(views, shift.shift_mm, SHIFT_PERSISTS_WITHIN_MM, vertical=shift.vertical))
     return shift
 
 
