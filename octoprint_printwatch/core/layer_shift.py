@@ -438,7 +438,9 @@ def _height_null(cameras: Mapping[str, tuple[np.ndarray, np.ndarray, float]]) ->
         dy = np.rint(heights * k).astype(int)
         scores_at.append(np.where(np.abs(dy) <= r, tolerant[np.clip(dy + r, 0, 2 * r)], 0.0))
         weights.append(weight)
-    pooled = np.stack(weights, axis=1) @ np.stack(scores_at, axis=0)      # (n, heights)
+    # (n, heights): a sum of outer products, not a matrix product: a product this size wakes BLAS's thread
+    # pool, whose threads then spin on the other core and slowed the next checks' shape tests by ~15 % CPU
+    pooled = sum(np.multiply.outer(weight, at) for weight, at in zip(weights, scores_at))
     return np.maximum(pooled.max(axis=1), 0.0)
 
 
