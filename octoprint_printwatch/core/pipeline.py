@@ -407,7 +407,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
            unreadable: Mapping[str, str] | Sequence[str] = (), *,
            layer_shift: LayerShift | None = None, top_closing: bool = False,
            pairs: Sequence[Sequence[str]] = (),
-           extra_before: Mapping[str, float] | None = None) -> tuple[str, list[str]]:
+           extra_before: Mapping[str, float] | None = None,
+           band_coverage_before: Mapping[str, float] | None = None) -> tuple[str, list[str]]:
     """The combined decision rule -> (verdict, reasons).
 
     * A camera counts only when it gave a frame and its background still matches the bed
@@ -434,7 +435,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       outline a little but fill no band); or, unless a top surface closes, when the median is under
       ``min_growth_pct`` and a view that saw no rise (or could not measure one) shows its newest band less
       than half covered by the part's colours where its band read solid (80 %) at an earlier check
-      (``ShapeResult.band_part_coverage``, core/nest.py: a nest of strands over a stopped part),
+      (``ShapeResult.band_part_coverage``; ``band_coverage_before``: each camera's highest reading at its
+      earlier checks; core/nest.py: a nest of strands over a stopped part),
       or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
       abstains reports no ``error_pct`` and never fails);
     * or when the cameras together confirm that the newest layers sit sideways on the older ones
@@ -486,10 +488,11 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     # itself: less than half covered by the part's material, in a view whose band read solid before (a face
     # in the bed's colour reads bare at every check) and that saw no rise or could not measure one. Not where a
     # top surface closes (a smooth top skin may look like the bed).
+    band_coverage_before = band_coverage_before or {}
     bare_band = [r for r in usable.values()
                  if (r.growth_pct is None or r.growth_pct < settings.min_growth_pct)
                  and r.band_part_coverage is not None and r.band_part_coverage < NEST_MAX_COVERAGE
-                 and (r.band_coverage_before or 0.0) >= SOLID_MIN_COVERAGE]
+                 and band_coverage_before.get(r.camera, 0.0) >= SOLID_MIN_COVERAGE]
     stalled = stalled or (not top_closing and bool(growth) and float(np.median(growth)) < settings.min_growth_pct
                           and bool(bare_band))
     size_fail, size_usable = [], 0
@@ -553,7 +556,7 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
         if not top_closing:
             fail_reasons.extend(f"{r.camera}: the newest layers show the part's colours over "
                                 f"{100.0 * r.band_part_coverage:.0f}% of their area "
-                                f"({100.0 * r.band_coverage_before:.0f}% at an earlier check): "
+                                f"({100.0 * band_coverage_before[r.camera]:.0f}% at an earlier check): "
                                 f"strands or bare bed where the part should be" for r in bare_band)
     if layer_shift is not None and confirms_layer_shift(layer_shift, settings.layer_shift_mm):
         fail_reasons.append(describe_layer_shift(layer_shift))
@@ -722,9 +725,9 @@ class CheckRunner:
             if second is not None:
                 shape[name] = second
                 errors[name] = second.error_pct
+        # how solid each camera's newest band looked before this check (decide: a stall under a nest of strands)
+        coverage_before = dict(self.band_coverage_before)
         for name, r in shape.items():
-            # how solid this camera's newest band looked before (decide: a stall under a nest of strands)
-            r.band_coverage_before = self.band_coverage_before.get(name)
             if r.usable and not r.first_look and r.band_part_coverage is not None:
                 self.band_coverage_before[name] = max(r.band_part_coverage, self.band_coverage_before.get(name, 0.0))
         shape_seconds = time.perf_counter() - started
@@ -735,7 +738,8 @@ class CheckRunner:
         self.band_shift_history = [*self.band_shift_history, (self.previous_z is not None, band_shifts)][-4:]
         top_closing = self.plan.top_closing(z)
         verdict, reasons = decide(shape, size, settings, unreadable, layer_shift=layer_shift,
-                                  top_closing=top_closing, pairs=self.plan.pairs, extra_before=extra_before)
+                                  top_closing=top_closing, pairs=self.plan.pairs, extra_before=extra_before,
+                                  band_coverage_before=coverage_before)
         self.last_extra = {name: r.extra_pct for name, r in shape.items() if r.usable}
         self.previous_z = z
         return CheckResult(layer=int(layer), z=float(z), verdict=verdict, shape_error_pct=errors, shape=shape,

@@ -168,9 +168,6 @@ class ShapeResult:
     #: mean share of the newest band's pixels covered by the part's material (core/nest.py: 1 a solid part,
     #: about 0.5 a mesh of strands, 0 the bed); None when the band figures are not measured or no palette
     band_part_coverage: float | None = None
-    #: the highest ``band_part_coverage`` this camera read at its earlier checks (its first look left out: its
-    #: band is the whole part); set by pipeline.CheckRunner, None before any
-    band_coverage_before: float | None = None
     # pieces the overlay is drawn from (kept so the picture costs nothing unless asked for)
     _frame: np.ndarray | None = field(default=None, repr=False)
     _expected: np.ndarray | None = field(default=None, repr=False)
