@@ -600,8 +600,42 @@ def one_move_explains(views: Sequence[tuple[tuple[int, int], np.ndarray | None]]
     return all(float(np.hypot(*(shift - jac @ move))) <= tolerance_px for shift, jac in rows)
 
 
+@dataclass
+class CameraState:
+    """What :class:`CheckRunner` remembers of one camera between the checks of a print."""
+
+    #: (dx, dy) px: the alignment of its first passing checks, the start of every later one
+    anchor: tuple[int, int] | None = None
+    #: the anchor is held (the part was tall enough for an unambiguous alignment, or a calibration offset
+    #: was learned): calibration error does not change during a print
+    frozen: bool = False
+    #: (k, 2) shifts no passing check so far could tell apart (each narrows them; _second_look)
+    shift_candidates: np.ndarray | None = None
+    #: the part's colours, from its last passing check
+    palette: np.ndarray | None = None
+    #: (h, w) bool observed mask of its last passing check (background removal's prior)
+    previous_mask: np.ndarray | None = None
+    #: (h, w) bool observed mask of its last usable check, and the height it was seen at (the growth test
+    #: needs the previous check's)
+    last_observed: np.ndarray | None = None
+    last_observed_z: float | None = None
+    #: the growth it read at its last usable check (None: it could not measure one)
+    last_growth: float | None = None
+    #: its extra material at the previous check (None: not usable there)
+    last_extra: float | None = None
+    #: the highest share of its newest band covered by the part's material so far (core/nest.py)
+    band_coverage: float | None = None
+    #: (dx, dy) px: a calibration error larger than the stated one, learned once (_learn_calibration_offsets);
+    #: its alignment bound is widened to reach it
+    calibration_offset: tuple[int, int] | None = None
+    #: a shift to confirm at the next check (no other camera vouched), and whether it abstained for one
+    #: already (once per print)
+    pending_offset: tuple[int, int] | None = None
+    offset_abstained: bool = False
+
+
 class CheckRunner:
-    """Runs the checks of one print in order, keeping per-camera state between them."""
+    """Runs the checks of one print in order, keeping per-camera state (:class:`CameraState`) between them."""
 
     def __init__(self, plan: JobPlan, settings: DetectionSettings | None,
                  backgrounds: Mapping[str, np.ndarray | None]):
@@ -613,33 +647,12 @@ class CheckRunner:
         self.backgrounds = {name: None if name in self.background_problems
                             else to_working_size(image, plan.cameras[name]) if name in plan.cameras else image
                             for name, image in backgrounds.items()}
-        self.previous_masks: dict[str, np.ndarray] = {}
-        self.anchors: dict[str, tuple[int, int]] = {}
-        # per camera: the (k, 2) shifts no passing check so far could tell apart (each narrows them)
-        self.shift_candidates: dict[str, np.ndarray] = {}
-        self.palettes: dict[str, np.ndarray] = {}
-        self.frozen: set[str] = set()
-        self.last_observed: dict[str, np.ndarray] = {}
-        # the height each camera's last_observed was seen at (the growth test needs the previous check's)
-        self.last_observed_z: dict[str, float] = {}
+        self.cameras = {name: CameraState() for name in plan.cameras}
         self.previous_z: float | None = None
-        # per camera: the growth it read at its last usable check (None: it could not measure one)
-        self.last_growth: dict[str, float | None] = {}
-        # per camera: its extra material at the previous check, where it was usable there
-        self.last_extra: dict[str, float] = {}
         self.keep_pictures = True
         self.size_checks: dict = {}  # "left+right" -> stereo.PairSizeCheck, kept for the whole print
         # the last four checks' layer-shift evidence: (had a check before it, {camera: BandShift})
         self.band_shift_history: list[tuple[bool, dict]] = []
-        # per camera: the highest share of its newest band covered by the part's material so far (core/nest.py)
-        self.band_coverage_before: dict[str, float] = {}
-        # per camera: (dx, dy) px, a calibration error larger than the stated one, learned once (see
-        # _learn_calibration_offsets); its alignment bound is widened to reach it
-        self.calibration_offsets: dict[str, tuple[int, int]] = {}
-        # per camera: a shift to confirm at the next check (no other camera vouched), and the cameras that
-        # abstained for one already (once per print)
-        self.pending_offsets: dict[str, tuple[int, int]] = {}
-        self.offset_abstained: set[str] = set()
 
     def run_check(self, layer: int, z: float, frames: Mapping[str, np.ndarray | None]) -> CheckResult:
         """Shape check per camera (size per pair once wired in) and the combined verdict."""
@@ -655,9 +668,9 @@ class CheckRunner:
         errors: dict[str, float | None] = {}
         unreadable: dict[str, str] = {}
         shape_inputs: dict[str, dict] = {}
-        growth_before = dict(self.last_growth)
-        extra_before = dict(self.last_extra)
-        for name in self.plan.cameras:
+        growth_before = {name: state.last_growth for name, state in self.cameras.items()}
+        extra_before = {name: state.last_extra for name, state in self.cameras.items() if state.last_extra is not None}
+        for name, state in self.cameras.items():
             frame = frames.get(name)
             background = self.backgrounds.get(name)
             if frame is None or background is None:
@@ -666,9 +679,9 @@ class CheckRunner:
                 errors[name] = None
                 continue
             regions = self.plan.regions(name, z, settings, self.previous_z)
-            if name in self.calibration_offsets:
+            if state.calibration_offset is not None:
                 regions = replace(regions, max_shift_px=regions.max_shift_px
-                                  + float(np.hypot(*self.calibration_offsets[name])))
+                                  + float(np.hypot(*state.calibration_offset)))
             shape_args = dict(
                 camera=name, background=background, frame=frame, regions=regions,
                 threshold=settings.threshold_for(name),
@@ -679,42 +692,40 @@ class CheckRunner:
                 bed_factor=settings.bed_noise_factor,
                 max_changed_bed_fraction=settings.max_changed_bed_fraction,
                 layer_shift_mm=settings.layer_shift_mm,
-                last_observed=self.last_observed.get(name),
+                last_observed=state.last_observed,
                 # a camera that could not see the part at the previous check (glare, a face in the bed's
                 # colour) has no mask of that height to measure the rise from: no growth reading
-                measure_growth=self.last_observed_z.get(name) == self.previous_z,
-                previous_mask=self.previous_masks.get(name),
-                anchor=self.anchors.get(name),
-                max_drift=1 if name in self.frozen else 2,
-                palette=self.palettes.get(name),
+                measure_growth=state.last_observed_z == self.previous_z,
+                previous_mask=state.previous_mask,
+                anchor=state.anchor,
+                max_drift=1 if state.frozen else 2,
+                palette=state.palette,
                 keep_pictures=self.keep_pictures,
                 # once its band read solid, a camera's band coverage is read only where the part stalls
-                band_coverage_wanted=(self.band_coverage_before.get(name, 0.0) < SOLID_MIN_COVERAGE
+                band_coverage_wanted=((state.band_coverage or 0.0) < SOLID_MIN_COVERAGE
                                       or settings.min_growth_pct >= STALL_READ_BELOW_GROWTH_PCT),
             )
-            result = check_shape(**shape_args, candidates=self.shift_candidates.get(name), track_candidates=True)
+            result = check_shape(**shape_args, candidates=state.shift_candidates, track_candidates=True)
             result = not_decisive_where_calibrated(result, shape_args)
             shape_inputs[name] = shape_args
             shape[name] = self._second_look(name, result, shape_args) or result
             errors[name] = shape[name].error_pct if result.usable else None
             if result.usable:
-                self.last_observed[name] = result.observed_mask
-                self.last_observed_z[name] = z
-                self.last_growth[name] = result.growth_pct
+                state.last_observed, state.last_observed_z = result.observed_mask, z
+                state.last_growth = result.growth_pct
             if result.palette is not None and result.usable and result.passed:
-                self.palettes[name] = result.palette
+                state.palette = result.palette
             if result.usable and result.passed and result.shift_candidates is not None \
                     and len(result.shift_candidates):
-                self.shift_candidates[name] = result.shift_candidates
+                state.shift_candidates = result.shift_candidates
             if result.usable and result.passed:
-                self.previous_masks[name] = result.observed_mask
+                state.previous_mask = result.observed_mask
                 # Calibration error does not change during a print: once the part is tall enough in
                 # this view for the alignment to be unambiguous, later checks stay near that shift
                 # (and a runout cannot walk the expected outline down, check by check).
-                if name not in self.frozen:
-                    self.anchors[name] = result.shift_px
-                    if _silhouette_rows(regions.silhouette) >= 2 * regions.max_shift_px:
-                        self.frozen.add(name)
+                if not state.frozen:
+                    state.anchor = result.shift_px
+                    state.frozen = _silhouette_rows(regions.silhouette) >= 2 * regions.max_shift_px
         self._learn_calibration_offsets(z, shape, shape_inputs, errors)
         # missing material alone gets its second look only from a camera no other camera corroborates
         failing = [name for name, r in shape.items() if r.usable and not r.passed]
@@ -726,10 +737,12 @@ class CheckRunner:
                 shape[name] = second
                 errors[name] = second.error_pct
         # how solid each camera's newest band looked before this check (decide: a stall under a nest of strands)
-        coverage_before = dict(self.band_coverage_before)
+        coverage_before = {name: state.band_coverage for name, state in self.cameras.items()
+                           if state.band_coverage is not None}
         for name, r in shape.items():
             if r.usable and not r.first_look and r.band_part_coverage is not None:
-                self.band_coverage_before[name] = max(r.band_part_coverage, self.band_coverage_before.get(name, 0.0))
+                state = self.cameras[name]
+                state.band_coverage = max(r.band_part_coverage, state.band_coverage or 0.0)
         shape_seconds = time.perf_counter() - started
         shape_cpu_seconds = time.process_time() - cpu_started
         size = self._size_check(z, frames, shape)
@@ -740,7 +753,8 @@ class CheckRunner:
         verdict, reasons = decide(shape, size, settings, unreadable, layer_shift=layer_shift,
                                   top_closing=top_closing, pairs=self.plan.pairs, extra_before=extra_before,
                                   band_coverage_before=coverage_before)
-        self.last_extra = {name: r.extra_pct for name, r in shape.items() if r.usable}
+        for name, state in self.cameras.items():
+            state.last_extra = shape[name].extra_pct if name in shape and shape[name].usable else None
         self.previous_z = z
         return CheckResult(layer=int(layer), z=float(z), verdict=verdict, shape_error_pct=errors, shape=shape,
                            size=size, reasons=reasons, seconds=time.perf_counter() - started,
@@ -761,9 +775,9 @@ class CheckRunner:
         camera fails, since a detached or stopped part is missed by several views) in a view that did not
         see the part slow (growth under 50 %) at this check nor at its previous one (``growth_before``: a
         runout or a part knocked away stops the rise, and with one usable camera nothing else can tell);
-        not decisive, no newest-band failure, the
-        material seen at the previous check (``shape_args["last_observed"]``) still seen (a part that slid or was knocked off
-        is not in place), the shift among those no passing check could tell apart, and the check passing
+        not decisive, no newest-band failure, the material seen at the previous check
+        (``shape_args["last_observed"]``) still seen (a part that slid or was knocked off is not in place),
+        the shift among those no passing check could tell apart, and the check passing
         there with half the threshold to spare. It changes nothing kept for later checks (anchor,
         candidates, masks): it can turn a failing camera into a passing one, never the other way round.
         """
@@ -774,7 +788,7 @@ class CheckRunner:
         else:
             shape_fits = result.missing_pct < threshold / 3.0
         if (not shape_fits or not result.usable or result.passed or result.decisive or result.best_candidate is None
-                or result.best_candidate == result.shift_px or name not in self.shift_candidates
+                or result.best_candidate == result.shift_px or self.cameras[name].shift_candidates is None
                 or (result.band_error_pct is not None and result.band_error_pct > self.settings.band_threshold_pct)
                 or not _still_in_place(result.observed_mask, shape_args.get("last_observed"))):
             return None
@@ -798,14 +812,16 @@ class CheckRunner:
         abstains, once per print, with the reason. A learned shift becomes the camera's anchor for the rest
         of the print (frozen) and its bound is widened to reach it."""
         in_place = [name for name, r in shape.items()
-                    if r.usable and r.passed and name not in self.calibration_offsets
+                    if r.usable and r.passed and self.cameras[name].calibration_offset is None
                     and float(np.hypot(*r.shift_px)) <= shape_inputs[name]["regions"].max_shift_px]
         for name, result in list(shape.items()):
-            if name in self.anchors or name in self.calibration_offsets or not result.usable or result.passed:
+            state = self.cameras[name]
+            if (state.anchor is not None or state.calibration_offset is not None or not result.usable
+                    or result.passed):
                 continue
-            pending = self.pending_offsets.pop(name, None)
+            pending, state.pending_offset = state.pending_offset, None
             vouching = [other for other in in_place if other != name]
-            if not vouching and pending is None and name in self.offset_abstained:
+            if not vouching and pending is None and state.offset_abstained:
                 continue
             args = shape_inputs[name]
             bound = float(args["regions"].max_shift_px)
@@ -831,10 +847,8 @@ class CheckRunner:
                     continue
                 why = f"while {', '.join(vouching)} see it in place"
             elif pending is None:
-                self.pending_offsets[name] = probe.shift_px
-                self.offset_abstained.add(name)
-                self.last_observed[name] = probe.observed_mask
-                self.last_observed_z[name] = z
+                state.pending_offset, state.offset_abstained = probe.shift_px, True
+                state.last_observed, state.last_observed_z = probe.observed_mask, z
                 shape[name] = replace(result, usable=False, passed=True, decisive=False, reasons=[
                     f"{where}, and no other camera sees the part in place: not judged until the next check tells "
                     f"a calibration error (the part grows there) from a part knocked off (it does not)"])
@@ -845,20 +859,17 @@ class CheckRunner:
                 continue
             else:
                 why = f"at two checks, and it grew there ({probe.growth_pct:.0f} % of the expected rise)"
-            self.calibration_offsets[name] = probe.shift_px
-            self.anchors[name] = probe.shift_px
+            state.calibration_offset = state.anchor = probe.shift_px
             # held there: the alignment's prior, centred on the stated calibration, would walk it back
-            self.frozen.add(name)
+            state.frozen = True
             probe.reasons.append(f"{where} {why}: this camera's calibration is off and its checks now use that "
                                  f"shift (recalibrate it)")
             shape[name] = probe
             errors[name] = probe.error_pct
-            self.last_observed[name] = probe.observed_mask
-            self.last_observed_z[name] = z
-            self.previous_masks[name] = probe.observed_mask
-            self.last_growth[name] = probe.growth_pct
+            state.last_observed, state.last_observed_z = probe.observed_mask, z
+            state.previous_mask, state.last_growth = probe.observed_mask, probe.growth_pct
             if probe.palette is not None:
-                self.palettes[name] = probe.palette
+                state.palette = probe.palette
 
     def _size_check(self, z: float, frames: Mapping[str, np.ndarray | None],
                     shape: Mapping[str, ShapeResult]) -> dict[str, dict]:
