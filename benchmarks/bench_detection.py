@@ -278,8 +278,7 @@ def evaluate(folder: Path, settings: DetectionSettings) -> dict:
                 mixed_errors[name] = seed_error(ours.observed_mask, view.silhouette)
                 mixed_fail |= mixed_errors[name] > SEED_THRESHOLD_PCT
         n_cams = max(1, len(result.shape))
-        shape_only, _ = decide(result.shape, {}, settings, result.unreadable, layer_shift=result.layer_shift,
-                               top_closing=result.top_closing)
+        shape_only, _ = decide(**dict(runner.last_decision, size={}))
         size_errors = {k: v.get("error_pct") for k, v in result.size.items()}
         rows.append({
             "layer": check.layer, "z": check.z, "started": t["failure_started"], "should_flag": t["should_flag"],

@@ -151,6 +151,7 @@ class LayerShift:
     # the same shift read in the views of the (up to four) checks before this one that tested their own
     # newest band, newest first (None: nothing there changes); see with_history
     before: list = field(default_factory=list)
+    back_to_first: bool = False   # ``before`` reaches back to the print's first check (see with_history)
 
     @property
     def score(self) -> float:
@@ -472,11 +473,14 @@ def with_history(shift: LayerShift | None,
     before it: ``history`` holds (tested, views) of those checks, oldest first, where ``views`` is what
     :func:`band_shift` gave per camera and ``tested`` says the check had a check before it (the first
     check's band is the whole part, not the newest layers). Fills ``before``: the last four checks,
-    newest first, up to the first that did not test its band."""
+    newest first, up to the first that did not test its band (``back_to_first``: that was the first check)."""
     if shift is None:
         return None
     shift.before = []
+    shift.back_to_first = False
     for tested, views in reversed(list(history[-4:])):
+        if not tested:
+            shift.back_to_first = True
         if not (tested and views):
             break
         shift.before.append(layer_shift_at(views, shift.shift_mm, SHIFT_PERSISTS_WITHIN_MM, vertical=shift.vertical))
@@ -536,18 +540,28 @@ def was_there_before(shift: LayerShift) -> bool:
     return len(shift.before) >= 3 and all(_was_there(e) for e in shift.before)
 
 
+def there_since_first_check(shift: LayerShift) -> bool:
+    """Whether every check since the first tested its band and read this shift already (SHIFT_WAS_NOT_THERE), from
+    one direction only: the first check's band is the whole part, so nothing shows the shift new, and one view's
+    outline sitting off by a little more at every check (an alignment anchored on the brim beside the part's foot,
+    a calibration error growing with the height) reads the same as a shift printed in the first tested band. Cameras
+    from two directions agreeing on one rigid move of the top are not fooled so (each view's error is its own)."""
+    return (shift.viewpoints < 2 and shift.back_to_first and bool(shift.before)
+            and all(_was_there(e) for e in shift.before))
+
+
 def confirms_layer_shift(shift: LayerShift, min_mm: float) -> bool:
     """Whether the pooled evidence says the newest layers were printed shifted by ``min_mm`` or more:
     at this check alone (SHIFT_CONFIRMED, ..._ONE_VIEW; for a new shift, :func:`is_new`, the same shares of
     the decided pixels, see SHIFT_OVERHANG_SHARE and SHIFT_OPPOSITE_MAX), or new and seen at two checks
-    (:func:`persists`), and not there all along (:func:`was_there_before`).
+    (:func:`persists`), and not there all along (:func:`was_there_before`, :func:`there_since_first_check`).
 
     The thresholds are shares of pixels (scale-free); see docs/detection.md for what they were
     measured on.
     """
     return ((_confirms(shift, min_mm, SHIFT_CONFIRMED, SHIFT_CONFIRMED_ONE_VIEW) or _confirms_new(shift, min_mm)
              or persists(shift, min_mm))
-            and not was_there_before(shift))
+            and not was_there_before(shift) and not there_since_first_check(shift))
 
 
 def describe_layer_shift(shift: LayerShift) -> str:

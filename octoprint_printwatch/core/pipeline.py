@@ -445,8 +445,9 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     * or when loose material (spaghetti) appeared around the part since the previous check: material new
       since then, where the model has none, attached to the part and over 2 mm beyond its outline
       (``ShapeResult.new_outside``), at least 6 mm^2 in two usable views, or 30 mm^2 when only one camera
-      is usable, or 6 mm^2 counting blobs in the bed-marks zone in cameras on two different sides
-      (:func:`core.tangle.loose_material`);
+      is usable, or 6 mm^2 counting blobs in the bed-marks zone in cameras on two different sides, or
+      in one view while the part's outline rose under half the expected height (median of two or more views;
+      not where a top surface closes) (:func:`core.tangle.loose_material`);
     * unknown when no camera and no pair gave usable evidence; ok otherwise.
     """
     if layer_shift is None:
@@ -566,7 +567,10 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
                             with_foot={cam: r.new_outside.with_foot_mm2 for cam, r in usable.items()
                                        if r.new_outside is not None},
                             directions={cam: r.new_outside.direction for cam, r in usable.items()
-                                        if r.new_outside is not None})
+                                        if r.new_outside is not None},
+                            # (not where a top surface closes: a ridge's or apex's last layers are too thin
+                            # for the outline to show them rise, so a normal part reads 0 % there)
+                            rise_pct=float(np.median(growth)) if len(growth) >= 2 and not top_closing else None)
     if tangle is not None:
         fail_reasons.append(tangle)
         shape_fail = True
@@ -584,6 +588,9 @@ CALIBRATION_PROBE_WIDEN = 2.5
 CALIBRATION_MAX_LEARNED = 2.0
 #: With no camera to vouch, the part must grow at the learned shift by this share of the expected rise.
 CALIBRATION_GROWTH_PCT = 50.0
+#: A camera whose anchor lies at least this share of its bound from the calibrated position is pinned at the
+#: bound: the part may lie beyond it (CheckRunner._learn_beyond_pinned_anchor looks there when it fails).
+CALIBRATION_PINNED_SHARE = 0.9
 #: A learned shift is refused when one move of the part on the bed explains every camera's shift to within
 #: this share of it (CheckRunner._learn_calibration_offsets).
 MOVE_FIT_SHARE = 0.3
@@ -653,6 +660,7 @@ class CheckRunner:
         self.size_checks: dict = {}  # "left+right" -> stereo.PairSizeCheck, kept for the whole print
         # the last four checks' layer-shift evidence: (had a check before it, {camera: BandShift})
         self.band_shift_history: list[tuple[bool, dict]] = []
+        self.last_decision: dict[str, Any] = {}  # the last check's arguments of decide()
 
     def run_check(self, layer: int, z: float, frames: Mapping[str, np.ndarray | None]) -> CheckResult:
         """Shape check per camera (size per pair once wired in) and the combined verdict."""
@@ -724,7 +732,7 @@ class CheckRunner:
                 # this view for the alignment to be unambiguous, later checks stay near that shift
                 # (and a runout cannot walk the expected outline down, check by check).
                 if not state.frozen:
-                    state.anchor = result.shift_px
+                    state.anchor = agreeing_anchor(result.shift_px, result.shift_candidates, shape_args["max_drift"])
                     state.frozen = _silhouette_rows(regions.silhouette) >= 2 * regions.max_shift_px
         self._learn_calibration_offsets(z, shape, shape_inputs, errors)
         # missing material alone gets its second look only from a camera no other camera corroborates
@@ -750,9 +758,11 @@ class CheckRunner:
         layer_shift = layer_shift_of(shape, self.band_shift_history, band_shifts)
         self.band_shift_history = [*self.band_shift_history, (self.previous_z is not None, band_shifts)][-4:]
         top_closing = self.plan.top_closing(z)
-        verdict, reasons = decide(shape, size, settings, unreadable, layer_shift=layer_shift,
-                                  top_closing=top_closing, pairs=self.plan.pairs, extra_before=extra_before,
-                                  band_coverage_before=coverage_before)
+        # kept for a re-decision on other evidence (bench_detection's shape-only verdict: size={})
+        self.last_decision = dict(shape=shape, size=size, settings=settings, unreadable=unreadable,
+                                  layer_shift=layer_shift, top_closing=top_closing, pairs=self.plan.pairs,
+                                  extra_before=extra_before, band_coverage_before=coverage_before)
+        verdict, reasons = decide(**self.last_decision)
         for name, state in self.cameras.items():
             state.last_extra = shape[name].extra_pct if name in shape and shape[name].usable else None
         self.previous_z = z
@@ -816,8 +826,11 @@ class CheckRunner:
                     and float(np.hypot(*r.shift_px)) <= shape_inputs[name]["regions"].max_shift_px]
         for name, result in list(shape.items()):
             state = self.cameras[name]
-            if (state.anchor is not None or state.calibration_offset is not None or not result.usable
-                    or result.passed):
+            if not result.usable or result.passed:
+                continue
+            if state.anchor is not None:
+                # it passed before (or learned already): only an anchor pinned at the bound may move
+                self._learn_beyond_pinned_anchor(name, z, result, shape, shape_inputs, errors, in_place)
                 continue
             pending, state.pending_offset = state.pending_offset, None
             vouching = [other for other in in_place if other != name]
@@ -871,6 +884,64 @@ class CheckRunner:
             if probe.palette is not None:
                 state.palette = probe.palette
 
+    def _learn_beyond_pinned_anchor(self, name: str, z: float, result: ShapeResult, shape: dict[str, ShapeResult],
+                                    shape_inputs: dict[str, dict], errors: dict[str, float | None],
+                                    in_place: list[str]) -> None:
+        """A camera that passed its earlier checks with its outline pinned at its bound and fails now: learn its
+        calibration error beyond the bound when its own view shows the part in place and grown there
+        (updates ``shape``).
+
+        A calibration error larger than the stated one first shows as an anchor at the edge of the
+        alignment's reach (the short part still fits within the tolerance), then, as the part grows, as extra
+        or missing material beside the outline. The camera's own frames tell that from a failure: the material
+        seen at the previous check is still seen (a part that moved is not), and at a shift beyond the anchor,
+        in the direction the anchor was pinned, the part fits clearly and grew as the model says (a stopped
+        part does not). A camera whose learned shift falls short as the part grows learns again the same way.
+        Another camera that passes with the part in place must not see one move of the part on the bed
+        explain both views (a knocked part)."""
+        state = self.cameras[name]
+        args = shape_inputs[name]
+        regions = args["regions"]
+        # the stated calibration's bound (a learned shift widened this camera's by its length)
+        bound = float(regions.max_shift_px) - float(np.hypot(*(state.calibration_offset or (0, 0))))
+        anchor = np.asarray(state.anchor, float)
+        reach = float(np.hypot(*anchor))
+        if reach < CALIBRATION_PINNED_SHARE * bound \
+                or not _still_in_place(result.observed_mask, args.get("last_observed")):
+            return
+        wide = replace(regions, max_shift_px=bound * CALIBRATION_PROBE_WIDEN)
+        probe = check_shape(**dict(args, regions=wide, anchor=None, max_drift=2))
+        offset = float(np.hypot(*probe.shift_px))
+        if not (probe.usable and probe.passed and max(bound, reach) < offset <= CALIBRATION_MAX_LEARNED * bound
+                and probe.error_pct <= probe.threshold / 2.0 and probe.error_pct <= result.error_pct / 2.0
+                and probe.growth_pct is not None and probe.growth_pct >= CALIBRATION_GROWTH_PCT):
+            return
+        # beyond the bound where the anchor was pinned: the anchor is the bound's nearest point to that shift
+        towards = np.asarray(probe.shift_px, float) * (reach / offset)
+        if float(np.hypot(*(towards - anchor))) > 2.0 * float(regions.tolerance_px) + 1.0:
+            return
+        vouching = [other for other in in_place if other != name]
+        if vouching:
+            views = [(probe.shift_px, regions.bed_to_image)] + [
+                (shape[other].shift_px, shape_inputs[other]["regions"].bed_to_image) for other in vouching]
+            if one_move_explains(views, max(2.0 * float(regions.tolerance_px) + 1.0, MOVE_FIT_SHARE * offset)):
+                return
+        probe.reasons.append(
+            f"{name}: the part appears {offset:.0f} px from where the calibration puts it ({probe.shift_px[0]:+d}, "
+            f"{probe.shift_px[1]:+d} px; the stated calibration error allows {bound:.0f} px), in place since the "
+            f"previous check and grown there ({probe.growth_pct:.0f} % of the expected rise): this camera's "
+            f"calibration is off and its checks now use that shift (recalibrate it)")
+        state.calibration_offset = state.anchor = probe.shift_px
+        state.frozen = True
+        # the shifts earlier checks could not tell apart lay within the old reach
+        state.shift_candidates = None
+        shape[name] = probe
+        errors[name] = probe.error_pct
+        state.last_observed, state.last_observed_z = probe.observed_mask, z
+        state.previous_mask, state.last_growth = probe.observed_mask, probe.growth_pct
+        if probe.palette is not None:
+            state.palette = probe.palette
+
     def _size_check(self, z: float, frames: Mapping[str, np.ndarray | None],
                     shape: Mapping[str, ShapeResult]) -> dict[str, dict]:
         """The stereo size check of every pair (seed ch. 5), fed with the shape check's observed masks
@@ -921,6 +992,24 @@ def unless_both_views_grew(entry: dict, growth_pct: Sequence[float | None]) -> d
     return dict(entry, error_pct=None, abstained=True,
                 reason=f"{entry.get('reason', '')}; not held: both views saw the part grow ({rises} of the "
                        f"expected rise)")
+
+
+def agreeing_anchor(shift: tuple[int, int], candidates: np.ndarray | None, drift: int) -> tuple[int, int]:
+    """The anchor a passing check leaves: its shift (dx, dy), or, when that lies more than ``drift`` px (per
+    axis) from every shift the check could not tell apart (``candidates``, (k, 2) (dx, dy)), the nearest of
+    those.
+
+    The shift comes from a search near the previous anchor that breaks ties on the upper outline; the
+    candidates from the exact overlap near the shifts earlier checks left. When they part, the anchor sits
+    where the overlap is clearly worse (a part standing on its own cast shadow: the outline slides onto the
+    shadow), and the smallest move that makes it agree with the overlap is to the nearest candidate."""
+    if candidates is None or not len(candidates):
+        return shift
+    offsets = np.asarray(candidates, int).reshape(-1, 2) - np.asarray(shift, int)
+    if int(np.abs(offsets).max(axis=1).min()) <= drift:
+        return shift
+    nearest = int(np.argmin(offsets[:, 0] ** 2 + offsets[:, 1] ** 2))
+    return int(shift[0] + offsets[nearest, 0]), int(shift[1] + offsets[nearest, 1])
 
 
 def _still_in_place(observed: np.ndarray | None, before: np.ndarray | None, share: float = 0.9) -> bool:

@@ -469,12 +469,16 @@ def clean_mask(material: np.ndarray, fill_like: np.ndarray | None = None) -> np.
     m = cv2.morphologyEx(material.astype(np.uint8), cv2.MORPH_OPEN, _KERNEL3)
     m = cv2.morphologyEx(m, cv2.MORPH_CLOSE, disk(2))
     if fill_like is not None and m.any():
-        h, w = m.shape
-        padded = cv2.copyMakeBorder(m, 1, 1, 1, 1, cv2.BORDER_CONSTANT, value=0)
-        cv2.floodFill(padded, np.zeros((h + 4, w + 4), np.uint8), (0, 0), 1)
-        holes = (padded[1:-1, 1:-1] == 0) & fill_like
-        m = m.astype(bool) | holes
+        return m.astype(bool) | (enclosed(m) & fill_like)
     return m.astype(bool)
+
+
+def enclosed(mask: np.ndarray) -> np.ndarray:
+    """(h, w) bool: the pixels outside ``mask`` ((h, w) bool or uint8) that it closes in (its holes)."""
+    h, w = mask.shape
+    padded = cv2.copyMakeBorder(mask.astype(np.uint8), 1, 1, 1, 1, cv2.BORDER_CONSTANT, value=0)
+    cv2.floodFill(padded, np.zeros((h + 4, w + 4), np.uint8), (0, 0), 1)
+    return padded[1:-1, 1:-1] == 0
 
 
 # ---------------------------------------------------------- stage 2: alignment
@@ -921,7 +925,9 @@ def check_shape(
     evidence = material_evidence(background[crop], frame[crop], prior, bed_sample,
                                  material_factor=material_factor, bed_factor=bed_factor, previous=previous,
                                  part=distance <= tol)
-    observed = clean_mask(evidence.material, fill_like=distance <= shift_bound)
+    cleaned = clean_mask(evidence.material)
+    holes = enclosed(cleaned) & (distance <= shift_bound) if cleaned.any() else np.zeros_like(cleaned)
+    observed = cleaned | holes
     observed_strong = observed & evidence.strong
     changed = evidence.changed_bed_fraction
 
@@ -943,6 +949,11 @@ def check_shape(
     # weak cues (darkening, texture) vouch for the part where it is expected, never for extra material
     grown_a = shift_mask(distance <= tol, dx, dy)
     observed = (observed & grown_a) | observed_strong
+    if holes.any():
+        # A hole is the part's own face (its top in the bed's colour, seen within its sides) only when the
+        # part closes it in: material within the aligned outline. A ring beyond it (the skirt around a part
+        # knocked off, with the bed showing through where the part stood) does not make the bed the part.
+        observed &= ~holes | enclosed(cleaned & outline_zone(expected_a, tol, tol))
     # the search box and the bed-marks zone come from the same calibration: they move with the alignment
     search_a = shift_mask(search, dx, dy) | grown_a
     dont_care_a = dilate(shift_mask(dont_care, dx, dy), tol)

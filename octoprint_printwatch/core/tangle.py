@@ -165,6 +165,9 @@ def new_material(
 TWO_VIEWS_MM2 = 6.0
 #: ... or, on a rig with one usable camera, when that camera sees this much.
 ONE_VIEW_MM2 = 30.0
+#: A part whose outline rose under this share of the expected rise (median over two or more views, %) has slowed:
+#: then one view seeing TWO_VIEWS_MM2 of new material suffices (:func:`loose_material`, ``rise_pct``)
+SLOWED_RISE_PCT = 50.0
 
 
 def viewpoints(directions: Mapping[str, float | None]) -> int:
@@ -178,7 +181,8 @@ def viewpoints(directions: Mapping[str, float | None]) -> int:
 
 def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = TWO_VIEWS_MM2,
                    one_view_mm2: float = ONE_VIEW_MM2, with_foot: Mapping[str, float | None] | None = None,
-                   directions: Mapping[str, float | None] | None = None) -> str | None:
+                   directions: Mapping[str, float | None] | None = None,
+                   rise_pct: float | None = None) -> str | None:
     """The reason to pause for loose material piling up around the part, or None.
 
     ``areas`` maps every usable camera to its :attr:`NewMaterial.area_mm2` (None: not measured). A tangle
@@ -193,13 +197,26 @@ def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = 
     different sides (:func:`viewpoints`) each see ``two_views_mm2`` of them. A skirt or brim line
     flickering in and out of the mask is one camera's artefact (its contrast at that camera's threshold),
     and a stereo pair's two cameras see the same artefact from one place.
+
+    ``rise_pct``: the median rise of the part's outline since the previous check (% of the model's) when two or
+    more views measured it, else None. Under ``SLOWED_RISE_PCT`` the part has slowed, and then one view seeing
+    ``two_views_mm2`` (the zone's blobs included) suffices on a rig of two or more usable cameras: a tangle
+    stops the part while its strands drape beyond the outline, and what one view may read as new material on a
+    normal print (a shadow edge at the rim, the part's own side beyond a misplaced outline, a flickering skirt
+    line) comes with a part that keeps rising. Other views of a tangle often see no strands beyond the outline
+    (they hang inside it, or over what was seen before): the growth test is the second witness.
     """
     seen = {cam: a for cam, a in areas.items() if a is not None and a >= two_views_mm2}
+    slowed = ""
     if not (len(seen) >= 2 or (len(areas) == 1 and any(a >= one_view_mm2 for a in seen.values()))):
-        seen = {cam: a for cam, a in (with_foot or {}).items() if a is not None and a >= two_views_mm2}
-        if viewpoints({cam: (directions or {}).get(cam) for cam in seen}) < 2:
+        seen = {cam: a for cam, a in {**areas, **(with_foot or {})}.items() if a is not None and a >= two_views_mm2}
+        if not seen:
             return None
+        if viewpoints({cam: (directions or {}).get(cam) for cam in seen}) < 2:
+            if rise_pct is None or rise_pct >= SLOWED_RISE_PCT or len(areas) < 2:
+                return None
+            slowed = f" while the part rose {rise_pct:.0f}% of the expected height"
     views = ", ".join(f"{cam} {a:.0f} mm²" for cam, a in sorted(seen.items(), key=lambda kv: -kv[1]))
     return (f"material appeared around the part since the previous check where the model has none "
-            f"({views}): spaghetti, or the part knocked loose?")
+            f"({views}){slowed}: spaghetti, or the part knocked loose?")
 

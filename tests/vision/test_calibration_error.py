@@ -5,10 +5,14 @@ bound reaches. It must not pause a normal print, and the print must still be wat
 The synthetic box print of tests/vision/test_pipeline.py, seen by two real (OpenCV) cameras; camera "a"'s
 frames come from a camera whose principal point is OFF_PX away from the one its calibration states.
 """
+import shutil
+from pathlib import Path
+
 import numpy as np
 
 from octoprint_printwatch.core.camera import Camera
-from octoprint_printwatch.core.pipeline import CheckRunner
+from octoprint_printwatch.core.pipeline import CheckRunner, evaluate_recording
+from octoprint_printwatch.core.recording import load_recording
 from octoprint_printwatch.core.settings import DetectionSettings
 
 from .test_pipeline import HEIGHTS, bed, cams, frame, make_plan  # noqa: F401  (cams is a fixture)
@@ -88,3 +92,38 @@ def test_a_lone_camera_does_not_learn_a_part_that_stopped_growing(cams):  # noqa
     results = run_alone(cams, [HEIGHTS[0][1]] * len(HEIGHTS))
     assert not results[0].shape["a"].usable   # the first check cannot tell: one check later it fails
     assert results[1].verdict == "fail" and not results[1].shape["a"].passed
+
+
+# A camera that passes its first checks with the outline pinned at the edge of its alignment bound, then
+# fails as the part grows: the cross-check's 008_normal at three times the stated calibration error
+# (tests/data/SOURCES.md). The part really stands ~40 px from where the calibration puts it (bound 26 px).
+OFF_BOUND = Path(__file__).resolve().parents[1] / "data" / "recordings" / "ring_calib3_off_bound_single"
+
+
+def test_a_camera_pinned_at_its_bound_learns_the_error_when_the_part_grows_in_place():
+    document = evaluate_recording(load_recording(OFF_BOUND), keep_results=True)
+    assert [c["verdict"] for c in document["checks"]] == ["ok"] * 5
+    first, learned, last = (document["checks"][k]["shape"]["s0"] for k in (0, 3, 4))
+    assert first["passed"] and np.hypot(*first["shift_px"]) <= 27   # pinned within the stated bound
+    assert np.hypot(*learned["shift_px"]) > 30 and learned["error_pct"] < learned["threshold"] / 2
+    assert np.hypot(*last["shift_px"]) > 30 and last["passed"]
+    # the camera says why it now looks elsewhere
+    assert any("recalibrate" in reason for reason in document["_results"][3].shape["s0"].reasons)
+
+
+def test_a_pinned_camera_learns_nothing_from_a_part_that_is_gone_or_stopped(tmp_path):
+    # the same print with the part knocked off before layer 112 (the empty bed), and with the print
+    # stopped after layer 98 (the same frame again at 112 and 126): nothing is learned, both are caught
+    gone = tmp_path / "gone"
+    shutil.copytree(OFF_BOUND, gone)
+    shutil.copy(gone / "background" / "s0.jpg", gone / "checks" / "003" / "s0.jpg")
+    document = evaluate_recording(load_recording(gone))
+    assert [c["verdict"] for c in document["checks"]][:4] == ["ok", "ok", "ok", "fail"]
+    assert np.hypot(*document["checks"][3]["shape"]["s0"]["shift_px"]) <= 27
+    stopped = tmp_path / "stopped"
+    shutil.copytree(OFF_BOUND, stopped)
+    for k in ("003", "004"):
+        shutil.copy(stopped / "checks" / "002" / "s0.jpg", stopped / "checks" / k / "s0.jpg")
+    document = evaluate_recording(load_recording(stopped))
+    assert "fail" in [c["verdict"] for c in document["checks"]]
+    assert all(np.hypot(*c["shape"]["s0"]["shift_px"]) <= 27 for c in document["checks"])
