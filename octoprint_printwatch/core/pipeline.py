@@ -872,17 +872,24 @@ class CheckRunner:
                 continue
             else:
                 why = f"at two checks, and it grew there ({probe.growth_pct:.0f} % of the expected rise)"
-            state.calibration_offset = state.anchor = probe.shift_px
-            # held there: the alignment's prior, centred on the stated calibration, would walk it back
-            state.frozen = True
-            probe.reasons.append(f"{where} {why}: this camera's calibration is off and its checks now use that "
-                                 f"shift (recalibrate it)")
-            shape[name] = probe
-            errors[name] = probe.error_pct
-            state.last_observed, state.last_observed_z = probe.observed_mask, z
-            state.previous_mask, state.last_growth = probe.observed_mask, probe.growth_pct
-            if probe.palette is not None:
-                state.palette = probe.palette
+            self._adopt_offset(name, z, probe, f"{where} {why}: this camera's calibration is off and its checks now "
+                                               f"use that shift (recalibrate it)", shape, errors)
+
+    def _adopt_offset(self, name: str, z: float, probe: ShapeResult, reason: str, shape: dict[str, ShapeResult],
+                      errors: dict[str, float | None]) -> None:
+        """Make ``probe``'s shift the camera's learned calibration offset and ``probe`` (with ``reason``) its
+        result at this check (updates ``shape`` and ``errors``)."""
+        state = self.cameras[name]
+        state.calibration_offset = state.anchor = probe.shift_px
+        # held there: the alignment's prior, centred on the stated calibration, would walk it back
+        state.frozen = True
+        probe.reasons.append(reason)
+        shape[name] = probe
+        errors[name] = probe.error_pct
+        state.last_observed, state.last_observed_z = probe.observed_mask, z
+        state.previous_mask, state.last_growth = probe.observed_mask, probe.growth_pct
+        if probe.palette is not None:
+            state.palette = probe.palette
 
     def _learn_beyond_pinned_anchor(self, name: str, z: float, result: ShapeResult, shape: dict[str, ShapeResult],
                                     shape_inputs: dict[str, dict], errors: dict[str, float | None],
@@ -926,21 +933,13 @@ class CheckRunner:
                 (shape[other].shift_px, shape_inputs[other]["regions"].bed_to_image) for other in vouching]
             if one_move_explains(views, max(2.0 * float(regions.tolerance_px) + 1.0, MOVE_FIT_SHARE * offset)):
                 return
-        probe.reasons.append(
+        # the shifts earlier checks could not tell apart lay within the old reach
+        state.shift_candidates = None
+        self._adopt_offset(name, z, probe, (
             f"{name}: the part appears {offset:.0f} px from where the calibration puts it ({probe.shift_px[0]:+d}, "
             f"{probe.shift_px[1]:+d} px; the stated calibration error allows {bound:.0f} px), in place since the "
             f"previous check and grown there ({probe.growth_pct:.0f} % of the expected rise): this camera's "
-            f"calibration is off and its checks now use that shift (recalibrate it)")
-        state.calibration_offset = state.anchor = probe.shift_px
-        state.frozen = True
-        # the shifts earlier checks could not tell apart lay within the old reach
-        state.shift_candidates = None
-        shape[name] = probe
-        errors[name] = probe.error_pct
-        state.last_observed, state.last_observed_z = probe.observed_mask, z
-        state.previous_mask, state.last_growth = probe.observed_mask, probe.growth_pct
-        if probe.palette is not None:
-            state.palette = probe.palette
+            f"calibration is off and its checks now use that shift (recalibrate it)"), shape, errors)
 
     def _size_check(self, z: float, frames: Mapping[str, np.ndarray | None],
                     shape: Mapping[str, ShapeResult]) -> dict[str, dict]:
