@@ -607,6 +607,35 @@ def one_move_explains(views: Sequence[tuple[tuple[int, int], np.ndarray | None]]
     return all(float(np.hypot(*(shift - jac @ move))) <= tolerance_px for shift, jac in rows)
 
 
+def _probe_beyond_bound(args: dict, failed: ShapeResult, bound: float, beyond: float) -> ShapeResult | None:
+    """A failing camera's check again (``args``: its check_shape arguments) with its alignment bound widened
+    ``CALIBRATION_PROBE_WIDEN`` times ``bound`` (the stated calibration's), free of its anchor; the result when
+    the part fits there clearly, at a shift beyond ``beyond`` px and within ``CALIBRATION_MAX_LEARNED`` times
+    ``bound``, else None. Clearly: half the threshold and half the failing check's error to spare, not merely a
+    pass (a shorter part, a runout, slid down the outline trades missing material at the top for missing
+    material at the foot)."""
+    wide = replace(args["regions"], max_shift_px=bound * CALIBRATION_PROBE_WIDEN)
+    probe = check_shape(**dict(args, regions=wide, anchor=None, max_drift=2))
+    offset = float(np.hypot(*probe.shift_px))
+    if (probe.usable and probe.passed and beyond < offset <= CALIBRATION_MAX_LEARNED * bound
+            and probe.error_pct <= probe.threshold / 2.0 and probe.error_pct <= failed.error_pct / 2.0):
+        return probe
+    return None
+
+
+def _moved_as_one(probe: ShapeResult, args: dict, vouching: Sequence[tuple[ShapeResult, dict]]) -> bool:
+    """Whether one move of the part on the bed explains ``probe``'s shift and those of the ``vouching`` cameras
+    ((result, check_shape arguments) of each camera that passes with the part in place): a part knocked off
+    moves every camera's view as one move on the bed would; independent calibration errors do not (a camera
+    looking along such a move sees little of it: then nothing is learned either). False with no camera."""
+    if not vouching:
+        return False
+    views = [(probe.shift_px, args["regions"].bed_to_image)] + [
+        (result.shift_px, other_args["regions"].bed_to_image) for result, other_args in vouching]
+    offset = float(np.hypot(*probe.shift_px))
+    return one_move_explains(views, max(2.0 * float(args["regions"].tolerance_px) + 1.0, MOVE_FIT_SHARE * offset))
+
+
 @dataclass
 class CameraState:
     """What :class:`CheckRunner` remembers of one camera between the checks of a print."""
@@ -838,25 +867,15 @@ class CheckRunner:
                 continue
             args = shape_inputs[name]
             bound = float(args["regions"].max_shift_px)
-            wide = replace(args["regions"], max_shift_px=bound * CALIBRATION_PROBE_WIDEN)
-            probe = check_shape(**dict(args, regions=wide, anchor=None, max_drift=2))
-            offset = float(np.hypot(*probe.shift_px))
-            # the part must fit there clearly better, not merely pass: a shorter part (a runout) slid down
-            # the outline trades missing material at the top for missing material at the foot
-            if not (probe.usable and probe.passed and bound < offset <= CALIBRATION_MAX_LEARNED * bound
-                    and probe.error_pct <= probe.threshold / 2.0 and probe.error_pct <= result.error_pct / 2.0):
+            probe = _probe_beyond_bound(args, result, bound, beyond=bound)
+            if probe is None:
                 continue
+            offset = float(np.hypot(*probe.shift_px))
             where = (f"{name}: the part appears {offset:.0f} px from where the calibration puts it "
                      f"({probe.shift_px[0]:+d}, {probe.shift_px[1]:+d} px; the stated calibration error allows "
                      f"{bound:.0f} px)")
             if vouching:
-                # a part knocked off before this camera's first check moves every camera's view as one move on
-                # the bed would; independent calibration errors do not (a camera looking along such a move
-                # sees little of it: then nothing is learned either)
-                views = [(probe.shift_px, args["regions"].bed_to_image)] + [
-                    (shape[other].shift_px, shape_inputs[other]["regions"].bed_to_image) for other in vouching]
-                if one_move_explains(views, max(2.0 * float(args["regions"].tolerance_px) + 1.0,
-                                                MOVE_FIT_SHARE * offset)):
+                if _moved_as_one(probe, args, [(shape[other], shape_inputs[other]) for other in vouching]):
                     continue
                 why = f"while {', '.join(vouching)} see it in place"
             elif pending is None:
@@ -916,23 +935,16 @@ class CheckRunner:
         if reach < CALIBRATION_PINNED_SHARE * bound \
                 or not _still_in_place(result.observed_mask, args.get("last_observed")):
             return
-        wide = replace(regions, max_shift_px=bound * CALIBRATION_PROBE_WIDEN)
-        probe = check_shape(**dict(args, regions=wide, anchor=None, max_drift=2))
-        offset = float(np.hypot(*probe.shift_px))
-        if not (probe.usable and probe.passed and max(bound, reach) < offset <= CALIBRATION_MAX_LEARNED * bound
-                and probe.error_pct <= probe.threshold / 2.0 and probe.error_pct <= result.error_pct / 2.0
-                and probe.growth_pct is not None and probe.growth_pct >= CALIBRATION_GROWTH_PCT):
+        probe = _probe_beyond_bound(args, result, bound, beyond=max(bound, reach))
+        if probe is None or probe.growth_pct is None or probe.growth_pct < CALIBRATION_GROWTH_PCT:
             return
+        offset = float(np.hypot(*probe.shift_px))
         # beyond the bound where the anchor was pinned: the anchor is the bound's nearest point to that shift
         towards = np.asarray(probe.shift_px, float) * (reach / offset)
         if float(np.hypot(*(towards - anchor))) > 2.0 * float(regions.tolerance_px) + 1.0:
             return
-        vouching = [other for other in in_place if other != name]
-        if vouching:
-            views = [(probe.shift_px, regions.bed_to_image)] + [
-                (shape[other].shift_px, shape_inputs[other]["regions"].bed_to_image) for other in vouching]
-            if one_move_explains(views, max(2.0 * float(regions.tolerance_px) + 1.0, MOVE_FIT_SHARE * offset)):
-                return
+        if _moved_as_one(probe, args, [(shape[other], shape_inputs[other]) for other in in_place if other != name]):
+            return
         # the shifts earlier checks could not tell apart lay within the old reach
         state.shift_candidates = None
         self._adopt_offset(name, z, probe, (

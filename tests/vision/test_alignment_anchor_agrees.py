@@ -6,13 +6,14 @@ anchor, tie-broken on the upper outline, slid the outline onto the shadow, 9-12 
 exact overlap could not tell apart; frozen there, the lit face read 16 % "extra material" from layer 80 on
 and paused this normal print.
 """
-import shutil
 from pathlib import Path
 
 import numpy as np
 
 from octoprint_printwatch.core.pipeline import agreeing_anchor, evaluate_recording
 from octoprint_printwatch.core.recording import load_recording
+
+from .recording_edits import empty_bed_at
 
 PYRAMID = Path(__file__).resolve().parents[1] / "data" / "recordings" / "pyramid_shadow_anchor_single"
 
@@ -28,10 +29,7 @@ def test_an_outline_anchored_on_the_shadow_moves_to_the_overlap_and_does_not_pau
 
 def test_the_same_view_still_sees_the_part_knocked_off(tmp_path):
     # the part gone before layer 80 (the empty bed): the moved anchor must not hide it
-    copy = tmp_path / "knocked_off"
-    shutil.copytree(PYRAMID, copy)
-    shutil.copy(copy / "background" / "cam0R.jpg", copy / "checks" / "003" / "cam0R.jpg")
-    document = evaluate_recording(load_recording(copy))
+    document = evaluate_recording(load_recording(empty_bed_at(PYRAMID, "cam0R", 3, tmp_path)))
     assert [c["verdict"] for c in document["checks"]][:4] == ["ok", "ok", "ok", "fail"]
 
 

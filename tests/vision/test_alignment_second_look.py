@@ -4,11 +4,12 @@ passing check could tell apart, and a real failure is never explained away.
 Recordings (tests/data/SOURCES.md): a normal print whose only camera anchored its outline on an ambiguous
 first check, and a detached part two views see missing.
 """
-import shutil
 from pathlib import Path
 
 from octoprint_printwatch.core.pipeline import evaluate_recording
 from octoprint_printwatch.core.recording import load_recording
+
+from .recording_edits import empty_bed_at
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "recordings"
 TOP_VIEW = DATA / "prism_black_on_black_top"
@@ -29,10 +30,7 @@ def test_a_part_gone_from_the_same_view_is_not_explained_away(tmp_path):
     # the same print with the part knocked off before the last check: the view shows the empty bed
     # (missing material only, which the second look handles); nothing seen before is still seen, so the
     # ambiguous alignment must not be used to excuse it
-    copy = tmp_path / "knocked_off"
-    shutil.copytree(TOP_VIEW, copy)
-    shutil.copy(copy / "background" / "cam0.jpg", copy / "checks" / "005" / "cam0.jpg")
-    document = evaluate_recording(load_recording(copy))
+    document = evaluate_recording(load_recording(empty_bed_at(TOP_VIEW, "cam0", 3, tmp_path)))
     assert [c["verdict"] for c in document["checks"]] == ["ok", "ok", "ok", "fail"]
     assert document["checks"][-1]["shape"]["cam0"]["missing_pct"] > 50.0
 

@@ -5,7 +5,6 @@ bound reaches. It must not pause a normal print, and the print must still be wat
 The synthetic box print of tests/vision/test_pipeline.py, seen by two real (OpenCV) cameras; camera "a"'s
 frames come from a camera whose principal point is OFF_PX away from the one its calibration states.
 """
-import shutil
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +14,7 @@ from octoprint_printwatch.core.pipeline import CheckRunner, evaluate_recording
 from octoprint_printwatch.core.recording import load_recording
 from octoprint_printwatch.core.settings import DetectionSettings
 
+from .recording_edits import empty_bed_at, stopped_after
 from .test_pipeline import HEIGHTS, bed, cams, frame, make_plan  # noqa: F401  (cams is a fixture)
 
 OFF_PX = (-26, 12)   # about 29 px: beyond camera a's ~19-px bound, within the 2.5x wider probe
@@ -114,16 +114,9 @@ def test_a_camera_pinned_at_its_bound_learns_the_error_when_the_part_grows_in_pl
 def test_a_pinned_camera_learns_nothing_from_a_part_that_is_gone_or_stopped(tmp_path):
     # the same print with the part knocked off before layer 112 (the empty bed), and with the print
     # stopped after layer 98 (the same frame again at 112 and 126): nothing is learned, both are caught
-    gone = tmp_path / "gone"
-    shutil.copytree(OFF_BOUND, gone)
-    shutil.copy(gone / "background" / "s0.jpg", gone / "checks" / "003" / "s0.jpg")
-    document = evaluate_recording(load_recording(gone))
+    document = evaluate_recording(load_recording(empty_bed_at(OFF_BOUND, "s0", 3, tmp_path)))
     assert [c["verdict"] for c in document["checks"]][:4] == ["ok", "ok", "ok", "fail"]
     assert np.hypot(*document["checks"][3]["shape"]["s0"]["shift_px"]) <= 27
-    stopped = tmp_path / "stopped"
-    shutil.copytree(OFF_BOUND, stopped)
-    for k in ("003", "004"):
-        shutil.copy(stopped / "checks" / "002" / "s0.jpg", stopped / "checks" / k / "s0.jpg")
-    document = evaluate_recording(load_recording(stopped))
+    document = evaluate_recording(load_recording(stopped_after(OFF_BOUND, "s0", 2, tmp_path)))
     assert "fail" in [c["verdict"] for c in document["checks"]]
     assert all(np.hypot(*c["shape"]["s0"]["shift_px"]) <= 27 for c in document["checks"])

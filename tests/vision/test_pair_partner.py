@@ -6,14 +6,14 @@ single-camera check and the one view speaks alone.
 Recording (tests/data/SOURCES.md): the independent cross-check simulator's seed-1 048_runout, a 16 mm orange
 cylinder on black PEI seen by a pair, with a stringing hair at layer 40 and the runout seen at layer 90.
 """
-import json
-import shutil
 from dataclasses import replace
 from pathlib import Path
 
 from octoprint_printwatch.core.pipeline import decide, evaluate_recording
 from octoprint_printwatch.core.recording import load_recording
 from octoprint_printwatch.core.settings import DetectionSettings
+
+from .recording_edits import without_background
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "recordings"
 HAIR = DATA / "cylinder_hair_pair"
@@ -32,12 +32,7 @@ def test_a_hair_seen_by_one_camera_of_a_pair_does_not_pause_and_the_runout_still
 
 
 def test_without_the_partners_evidence_the_one_view_speaks_alone(tmp_path):
-    copy = tmp_path / "hair_right_background_lost"
-    shutil.copytree(HAIR, copy)
-    session = json.loads((copy / "session.json").read_text(encoding="utf-8"))
-    (copy / session["background"].pop("s0R")).unlink()
-    (copy / "session.json").write_text(json.dumps(session, indent=1), encoding="utf-8")
-    document = evaluate_recording(load_recording(copy))
+    document = evaluate_recording(load_recording(without_background(HAIR, "s0R", tmp_path)))
     assert [c["verdict"] for c in document["checks"]][:4] == ["ok", "ok", "ok", "fail"]
 
 

@@ -5,24 +5,14 @@ explain away a part that a single view saw stop rising and then go missing.
 Recordings (tests/data/SOURCES.md): a gear knocked sideways at layer 24 seen by two cameras, and a normal
 print whose only camera anchored its outline on an ambiguous first check.
 """
-import json
-import shutil
 from pathlib import Path
 
 from octoprint_printwatch.core.pipeline import evaluate_recording
 from octoprint_printwatch.core.recording import load_recording
 
+from .recording_edits import without_background
+
 DATA = Path(__file__).resolve().parents[1] / "data" / "recordings"
-
-
-def without_background(name: str, camera: str, tmp_path: Path) -> Path:
-    """A copy of recording ``name`` whose ``camera`` has no empty-bed frame (the writer lost it)."""
-    copy = tmp_path / f"{name}_no_{camera}_background"
-    shutil.copytree(DATA / name, copy)
-    session = json.loads((copy / "session.json").read_text(encoding="utf-8"))
-    (copy / session["background"].pop(camera)).unlink()
-    (copy / "session.json").write_text(json.dumps(session, indent=1), encoding="utf-8")
-    return copy
 
 
 def test_a_detached_part_seen_by_the_only_usable_camera_is_not_explained_away(tmp_path):
@@ -30,7 +20,8 @@ def test_a_detached_part_seen_by_the_only_usable_camera_is_not_explained_away(tm
     # expected at layer 24 (knocked away) and 11 % of it missing at layer 32. Before, the second look moved the
     # outline 20 px onto the part's new place (within the calibration bound), the check passed and the print
     # ran on; with both cameras the same check fails (test_alignment_second_look.py)
-    document = evaluate_recording(load_recording(without_background("gear_detached_two_views", "cam2", tmp_path)))
+    copy = without_background(DATA / "gear_detached_two_views", "cam2", tmp_path)
+    document = evaluate_recording(load_recording(copy))
     checks = document["checks"]
     assert all("cam2: no background frame" in " ".join(c["reasons"]) for c in checks)
     assert checks[1]["shape"]["cam1"]["growth_pct"] < 50.0
