@@ -403,12 +403,19 @@ def unseen_by_partner(result: ShapeResult, usable: Mapping[str, ShapeResult], pa
     return bool(partners) and all(p.passed and p.extra_pct == 0.0 for p in partners)
 
 
+#: A coarse growth reading counts in decide only from a view that read the part rising this much (%) at its
+#: previous check (fine or coarse reading)
+COARSE_ROSE_BEFORE_PCT = 50.0
+
+
 def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings: DetectionSettings,
            unreadable: Mapping[str, str] | Sequence[str] = (), *,
            layer_shift: LayerShift | None = None, top_closing: bool = False,
            pairs: Sequence[Sequence[str]] = (),
            extra_before: Mapping[str, float] | None = None,
-           band_coverage_before: Mapping[str, float] | None = None) -> tuple[str, list[str]]:
+           band_coverage_before: Mapping[str, float] | None = None,
+           rise_before: Mapping[str, float | None] | None = None,
+           missing_before: Mapping[str, float] | None = None) -> tuple[str, list[str]]:
     """The combined decision rule -> (verdict, reasons).
 
     * A camera counts only when it gave a frame and its background still matches the bed
@@ -436,7 +443,11 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       ``min_growth_pct`` and a view that saw no rise (or could not measure one) shows its newest band less
       than half covered by the part's colours where its band read solid (80 %) at an earlier check
       (``ShapeResult.band_part_coverage``; ``band_coverage_before``: each camera's highest reading at its
-      earlier checks; core/nest.py: a nest of strands over a stopped part),
+      earlier checks; core/nest.py: a nest of strands over a stopped part); or, where no camera measured
+      growth and no top surface closes, when the median of the coarse readings (``coarse_growth_pct``) of the
+      views that read a rise of 50 % at their previous check (``rise_before``) is under ``min_growth_pct`` and a
+      view reading under it misses half the threshold more of the part than at its previous check
+      (``missing_before``),
       or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
       abstains reports no ``error_pct`` and never fails);
     * or when the cameras together confirm that the newest layers sit sideways on the older ones
@@ -496,6 +507,24 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
                  and band_coverage_before.get(r.camera, 0.0) >= SOLID_MIN_COVERAGE]
     stalled = stalled or (not top_closing and bool(growth) and float(np.median(growth)) < settings.min_growth_pct
                           and bool(bare_band))
+    # Where no camera resolves the rise (4-6 px per check: a part seen small, checks a few layers apart) the
+    # coarse readings (``ShapeResult.coarse_growth_pct``, to the pixel, +-25 %) stand in, each from a view that
+    # read the part rising (50 %) at its previous check (``rise_before``: a view that never sees the top rise, a
+    # face in the bed's colour, reads 0 at every check), and corroborated by material gone missing since that
+    # check in a view reading no rise (``missing_before``: a face the colour of the bed misses the same at every
+    # check). A stop is a change: the part rose, now it does not, and its newest layers are missing.
+    rise_before, missing_before = rise_before or {}, missing_before or {}
+    coarse = {cam: r.coarse_growth_pct for cam, r in usable.items()
+              if r.coarse_growth_pct is not None and r.coarse_growth_pct >= -15.0
+              and (rise_before.get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT}
+    coarse_stalled = (not growth and not top_closing and bool(coarse)
+                      and float(np.median(list(coarse.values()))) < settings.min_growth_pct
+                      and any(coarse[cam] < settings.min_growth_pct and cam in missing_before
+                              and usable[cam].missing_pct - missing_before[cam] >= usable[cam].threshold / 2.0
+                              for cam in coarse))
+    if coarse_stalled:
+        growth = list(coarse.values())
+    stalled = stalled or coarse_stalled
     size_fail, size_usable = [], 0
     for key, entry in size.items():
         error = entry.get("error_pct") if isinstance(entry, Mapping) else None
@@ -659,6 +688,10 @@ class CameraState:
     last_growth: float | None = None
     #: its extra material at the previous check (None: not usable there)
     last_extra: float | None = None
+    #: its growth reading at the previous check, fine or else coarse (None: none), and its missing material
+    #: there (None: not usable there): decide's coarse stall rule
+    last_rise: float | None = None
+    last_missing: float | None = None
     #: the highest share of its newest band covered by the part's material so far (core/nest.py)
     band_coverage: float | None = None
     #: (dx, dy) px: a calibration error larger than the stated one, learned once (_learn_calibration_offsets);
@@ -707,6 +740,9 @@ class CheckRunner:
         shape_inputs: dict[str, dict] = {}
         growth_before = {name: state.last_growth for name, state in self.cameras.items()}
         extra_before = {name: state.last_extra for name, state in self.cameras.items() if state.last_extra is not None}
+        rise_before = {name: state.last_rise for name, state in self.cameras.items() if state.last_rise is not None}
+        missing_before = {name: state.last_missing for name, state in self.cameras.items()
+                          if state.last_missing is not None}
         for name, state in self.cameras.items():
             frame = frames.get(name)
             background = self.backgrounds.get(name)
@@ -790,10 +826,15 @@ class CheckRunner:
         # kept for a re-decision on other evidence (bench_detection's shape-only verdict: size={})
         self.last_decision = dict(shape=shape, size=size, settings=settings, unreadable=unreadable,
                                   layer_shift=layer_shift, top_closing=top_closing, pairs=self.plan.pairs,
-                                  extra_before=extra_before, band_coverage_before=coverage_before)
+                                  extra_before=extra_before, band_coverage_before=coverage_before,
+                                  rise_before=rise_before, missing_before=missing_before)
         verdict, reasons = decide(**self.last_decision)
         for name, state in self.cameras.items():
             state.last_extra = shape[name].extra_pct if name in shape and shape[name].usable else None
+            r = shape.get(name)
+            state.last_rise = (None if r is None or not r.usable
+                               else r.growth_pct if r.growth_pct is not None else r.coarse_growth_pct)
+            state.last_missing = r.missing_pct if r is not None and r.usable else None
         self.previous_z = z
         return CheckResult(layer=int(layer), z=float(z), verdict=verdict, shape_error_pct=errors, shape=shape,
                            size=size, reasons=reasons, seconds=time.perf_counter() - started,

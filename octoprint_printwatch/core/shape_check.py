@@ -39,7 +39,7 @@ import cv2
 import numpy as np
 
 from .camera import Camera
-from .layer_shift import BandShift, band_shift
+from .layer_shift import BandShift, band_shift, stretched
 from .tangle import NewMaterial, new_material
 from .nest import STALL_READ_BELOW_GROWTH_PCT, part_coverage
 from .shadows import shade_of_clipped_bed, shadow_left
@@ -168,6 +168,11 @@ class ShapeResult:
     #: mean share of the newest band's pixels covered by the part's material (core/nest.py: 1 a solid part,
     #: about 0.5 a mesh of strands, 0 the bed); None when the band figures are not measured or no palette
     band_part_coverage: float | None = None
+    #: the growth test where the expected rise is too small for ``growth_pct`` (a median under 1.5 ``min_rise``,
+    #: 6 px at 640x480: a part seen small, a short check interval): the same figure with a median rise of
+    #: ``min_rise`` (4 px) allowed, read to the pixel, so about +-25 %; None where ``growth_pct`` is measured.
+    #: pipeline.decide's stall rules fall back on it only when no camera measured ``growth_pct``
+    coarse_growth_pct: float | None = None
     # pieces the overlay is drawn from (kept so the picture costs nothing unless asked for)
     _frame: np.ndarray | None = field(default=None, repr=False)
     _expected: np.ndarray | None = field(default=None, repr=False)
@@ -194,6 +199,7 @@ class ShapeResult:
             "band_error_pct": None if self.band_error_pct is None else round(self.band_error_pct, 2),
             "band_missing_pct": None if self.band_missing_pct is None else round(self.band_missing_pct, 2),
             "growth_pct": None if self.growth_pct is None else round(self.growth_pct, 1),
+            "coarse_growth_pct": None if self.coarse_growth_pct is None else round(self.coarse_growth_pct, 1),
             "shift_px": list(self.shift_px),
             "band_shift": None if self.band_shift is None else self.band_shift.figures(),
             **(self.new_outside.figures() if self.new_outside is not None
@@ -641,28 +647,94 @@ def _profile_cost(observed: np.ndarray, expected: np.ndarray, dxs: np.ndarray, d
     return costs
 
 
+#: The coarse growth reading (ShapeResult.coarse_growth_pct) needs a median expected rise of this many ``min_rise``
+COARSE_RISE_FACTOR = 1.0
+
+
 def profile_growth(observed: np.ndarray, previous: np.ndarray, expected: np.ndarray,
-                   expected_before: np.ndarray, min_rise: float = 3.0, min_columns: int = 12) -> float | None:
+                   expected_before: np.ndarray, min_rise: float = 3.0, min_columns: int = 12,
+                   median_factor: float = 1.5, columns: np.ndarray | None = None) -> float | None:
     """How much the part's upper outline rose since the previous check, in % of what the model says.
 
     Per image column where the expected upper outline rises by at least ``min_rise`` px, the ratio of
     the observed rise (previous vs current material mask) to the expected one; the median over those
-    columns, times 100 (None unless the median expected rise is at least 1.5 ``min_rise``).
+    columns, times 100 (None unless the median expected rise is at least ``median_factor`` ``min_rise``).
     A part that stopped growing gives ~0, a normal one ~100. The top face of a
     part is often the colour of what lies behind it, so the outline is compared rather than the band's
     area: the near and the far edge of a top face rise alike. None when fewer than ``min_columns``
-    columns qualify (a camera looking straight down, a part that ended).
+    columns qualify (a camera looking straight down, a part that ended). ``columns`` ((w,) bool or None):
+    the columns that may count at all (where the view could see the part's top rise: check_shape).
     """
     exp_now = upper_profile(expected)
     exp_before = upper_profile(expected_before)
     rise_expected = exp_before - exp_now
     obs_now, obs_before = upper_profile(observed), upper_profile(previous)
-    cols = np.flatnonzero((rise_expected >= min_rise) & ~np.isnan(obs_now) & ~np.isnan(obs_before))
+    usable = (rise_expected >= min_rise) & ~np.isnan(obs_now) & ~np.isnan(obs_before)
+    if columns is not None:
+        usable &= columns
+    cols = np.flatnonzero(usable)
     # a rise of a few pixels is within what mask edges wobble by between two frames
-    if cols.size < min_columns or float(np.median(rise_expected[cols])) < 1.5 * min_rise:
+    if cols.size < min_columns or float(np.median(rise_expected[cols])) < median_factor * min_rise:
         return None
     ratio = (obs_before[cols] - obs_now[cols]) / rise_expected[cols]
     return float(np.median(np.clip(ratio, -1.0, 2.0)) * 100.0)
+
+
+#: The top of the observed material is an edge of the frame unless the frame changes across it by less than
+#: this share of what the background frame changes by there, and by no more than noise (edge_in_the_frame).
+#: Where the hotend's mirror image in a glass bed is hidden by a black part (cross-check seed 5 010_normal)
+#: the frame changes by 5-30 % of the background's change, within noise; where a light part's top stands
+#: in front of the bed's rim (seed 1 018_normal) by 25-35 %, but 60 grey levels, far beyond noise.
+EDGE_OF_THE_FRAME_SHARE = 0.5
+
+
+def edge_in_the_frame(observed: np.ndarray, frame: np.ndarray, background: np.ndarray,
+                      tolerance: float, bed_sample: np.ndarray | None = None,
+                      material_factor: float = 5.0) -> np.ndarray:
+    """(w,) bool: the columns where the top of the observed material is an edge of the current frame.
+
+    ``observed`` (h, w) bool; ``frame`` (h, w, 3) and ``background`` (h, w, 3, at the frame's exposure). Per
+    column, the mean colour over a few rows just above the top-most material pixel (from ``tolerance`` + 1
+    to 2 ``tolerance`` + 3 px, past the soft rim every outline has) is compared with that over as many rows
+    just below it, in the frame and in the background frame. A part's top is an edge of the frame (the part
+    below it, what lies behind above it). A top across which the frame changes by less than
+    :data:`EDGE_OF_THE_FRAME_SHARE` of what the background frame changes by, and by no more than
+    ``material_factor`` times the noise of such a step (from the spread of frame - background on the certain
+    bed ``bed_sample``, (h, w) bool; None: no noise test), is the outline of something the background frame
+    held there, not of the part: a black part on a dark bed reads as material only where it hides a bright
+    reflection of the hotend the background frame shows, and that material's top stays where the
+    reflection's was however the part grows; above it the part looks like what lies behind it.
+    """
+    h, w = observed.shape
+    top = upper_profile(observed)
+    columns = np.zeros(w, bool)
+    cols = np.flatnonzero(~np.isnan(top))
+    if cols.size == 0:
+        return columns
+    near, far = int(np.ceil(tolerance)) + 1, int(np.ceil(2.0 * tolerance)) + 3
+    offsets = np.arange(near, far + 1)
+    t = top[cols].astype(int)[:, None]
+    above, below = t - offsets[None, :], t + offsets[None, :]
+    ok = (above >= 0).all(axis=1) & (below < h).all(axis=1)
+    cols, above, below = cols[ok], above[ok], below[ok]
+    if cols.size == 0:
+        return columns
+    fr, bg = frame.astype(np.float32), background.astype(np.float32)
+    c = cols[:, None]
+    frame_step = np.linalg.norm(fr[above, c].mean(axis=1) - fr[below, c].mean(axis=1), axis=1)
+    background_step = np.linalg.norm(bg[above, c].mean(axis=1) - bg[below, c].mean(axis=1), axis=1)
+    # a change of the frame clear of the noise is an edge whatever the background did: the part differs from
+    # what lies above its top, and would be seen there had it risen (a difference of two means of n rows has
+    # 1/sqrt(n) of the per-pixel spread of frame - background, norm over the three channels)
+    least_step = np.inf
+    if bed_sample is not None and int(bed_sample.sum()) >= 50:
+        sample = np.flatnonzero(bed_sample)
+        sample = sample[:: sample.size // 6000 + 1]
+        diff = fr.reshape(-1, 3)[sample] - bg.reshape(-1, 3)[sample]
+        spread = 1.4826 * np.median(np.abs(diff - np.median(diff, axis=0)), axis=0)
+        least_step = material_factor * float(np.linalg.norm(spread)) / np.sqrt(len(offsets))
+    columns[cols] = (frame_step >= EDGE_OF_THE_FRAME_SHARE * background_step) | (frame_step >= least_step)
+    return columns
 
 
 def displaced_part(observed: np.ndarray, expected: np.ndarray, reach: int, min_move: float,
@@ -715,6 +787,20 @@ class Comparison:
     band_extra: int
     band_pixels: int
     band_core_pixels: int
+
+
+def _not_a_mark(observed: np.ndarray, last_observed: np.ndarray, expected: np.ndarray, previous: np.ndarray,
+                tol: float) -> np.ndarray:
+    """(h, w) bool: material seen now that no skirt, brim or bed mark can be: marks are printed in the first layers,
+    so they were seen at the previous check too, and between two checks the part itself only rises by its newest
+    band. Material beyond what the previous check saw, raised by the band's image height (``expected`` over
+    ``previous``, the model's silhouettes now and then), and beyond the alignment tolerance of both, is neither:
+    the newest layers sticking out sideways (a layer shift), or something loose."""
+    now, then = upper_profile(expected), upper_profile(previous)
+    both = ~np.isnan(now) & ~np.isnan(then)
+    rise = int(np.ceil(max(float(np.max(then[both] - now[both])) if both.any() else 0.0, 0.0) + tol))
+    grown = dilate(stretched(last_observed, -rise), tol)
+    return observed & ~grown
 
 
 def compare_masks(
@@ -998,14 +1084,22 @@ def check_shape(
     # Growth since the previous check: the same camera, the same processing, so calibration and
     # alignment errors cancel; a part that stopped growing (runout, clog, spaghetti) shows none of the
     # new band, even where the band is a thin crescent the absolute comparison cannot resolve.
-    growth_pct = None
+    growth_pct = coarse_growth_pct = None
     if (measure_growth and last_observed is not None and last_observed.shape == (h, w)
             and regions.previous_silhouette is not None):
         before_a = shift_mask(regions.previous_silhouette[crop].astype(bool), dx, dy)
         # only material within the expected outlines counts: strings and the hotend above the part
         # must not make its top look higher than it is
-        growth_pct = profile_growth(observed & grown_a, last_observed[crop] & dilate(before_a, tol),
-                                    expected_a, before_a, min_rise=max(4.0, 2.0 * tol))
+        growth_args = (observed & grown_a, last_observed[crop] & dilate(before_a, tol), expected_a, before_a)
+        # (only where the top of the material is an edge of the frame: the part's, not one the background held)
+        edges = edge_in_the_frame(observed & grown_a, frame[crop], evidence.background_norm, tol, bed_sample,
+                                  material_factor)
+        growth_pct = profile_growth(*growth_args, min_rise=max(4.0, 2.0 * tol), columns=edges)
+        if growth_pct is None:
+            # a rise of 4-6 px per check (a part seen small, checks a few layers apart): read it all the same,
+            # coarsely (a pixel of edge wobble is 20-25 %); decide uses it only where no camera reads finer
+            coarse_growth_pct = profile_growth(*growth_args, min_rise=max(4.0, 2.0 * tol),
+                                               median_factor=COARSE_RISE_FACTOR, columns=edges)
 
     n = max(comparison.expected_pixels, 1)
     missing_pct = 100.0 * int(comparison.missing.sum()) / n
@@ -1022,9 +1116,15 @@ def check_shape(
             reach = int(np.ceil(8.0 * regions.px_per_mm))
             before_band = (shift_mask(regions.previous_silhouette[crop].astype(bool), dx, dy)
                            if regions.previous_silhouette is not None else expected_a & ~band_a)
+            marks = dont_care_a
+            if (measure_growth and last_observed is not None and last_observed.shape == (h, w)
+                    and regions.previous_silhouette is not None):
+                marks = dont_care_a & ~(_not_a_mark(observed, last_observed[crop], expected,
+                                                    regions.previous_silhouette[crop].astype(bool), tol)
+                                        | bed_evidence)
             shifted_band = band_shift(observed, bed_evidence, before_band, band_a, reach, reach // 2,
                                       int(np.ceil(layer_shift_mm * regions.px_per_mm)), tol,
-                                      undecided=dont_care_a if reflection_a is None else dont_care_a | reflection_a,
+                                      undecided=marks if reflection_a is None else marks | reflection_a,
                                       bed_to_image=regions.bed_to_image, height_to_image=regions.height_to_image)
 
     # A part knocked off its place: most of the outline is empty, and the whole part stands elsewhere
@@ -1102,7 +1202,7 @@ def check_shape(
         decisive=decisive, shift_candidates=shift_candidates, best_candidate=best_candidate,
         new_outside=new_outside, moved_px=moved_px, first_look=last_observed is None,
         background_missing_pct=background_missing_pct, background_band_missing_pct=background_band_missing_pct,
-        band_part_coverage=band_coverage,
+        band_part_coverage=band_coverage, coarse_growth_pct=coarse_growth_pct,
     )
     if keep_pictures:
         full = np.zeros((h, w), bool)

@@ -333,3 +333,34 @@ def test_massive_unexpected_material_is_decisive_from_one_camera(bed):
     big, small = with_blob(40), with_blob(20)
     assert not big.passed and big.extra_pct >= 4 * big.threshold and big.decisive
     assert not small.passed and small.extra_pct < 4 * small.threshold and not small.decisive
+
+
+def test_growth_is_not_read_on_the_outline_of_something_the_background_frame_held(bed):
+    """A black part on a dark bed reads as material only where it hides a bright patch the background
+    frame shows there (the hotend's mirror image in a glass bed): that material's top is the patch's top at
+    every check, however the part grows. It is an edge of the background frame, not of the frame, so the
+    growth test does not read it (HEAD: 0 %, a stalled part). A part that really stalled, seen against its
+    backdrop, still reads 0 %."""
+    from dataclasses import replace
+    dark_bed = bed_texture(colour=(45, 38, 55), grain=2.0)
+    patch = Box(140, 120, 180, 165)
+    held = paint_part(dark_bed, patch, colour=(200, 180, 230))            # the bright patch, background only
+    background = camera_effects(held, seed=11)
+    before_box, now_box = Box(110, 110, 210, 170), PART                   # the part rose 30 rows
+    # a part in the bed's very colour: where it stands, the frames show the bed (and not the patch)
+    frame_before = camera_effects(dark_bed, seed=5)
+    frame_now = camera_effects(dark_bed, seed=6)
+    reg_before = regions(before_box)
+    reg_now = replace(regions(now_box), previous_silhouette=before_box.mask())
+    first = check_shape("cam", background, frame_before, reg_before)
+    assert first.usable and first.observed_mask[patch.mask()].mean() > 0.8   # seen where it hides the patch
+    second = check_shape("cam", background, frame_now, reg_now, last_observed=first.observed_mask,
+                         anchor=first.shift_px)
+    assert second.growth_pct is None
+    # the same part stalled in a colour the bed shows it in: its top is an edge of the frame
+    visible_before = camera_effects(paint_part(dark_bed, before_box), seed=5)
+    visible_stalled = camera_effects(paint_part(dark_bed, before_box), seed=6)
+    first = check_shape("cam", background, visible_before, reg_before)
+    second = check_shape("cam", background, visible_stalled, reg_now, last_observed=first.observed_mask,
+                         anchor=first.shift_px)
+    assert second.growth_pct == pytest.approx(0, abs=10)

@@ -1,0 +1,61 @@
+"""The coarse growth reading: a part whose rise per check is 4-6 px (seen small, checks a few layers apart)."""
+import numpy as np
+
+from octoprint_printwatch.core.pipeline import decide
+from octoprint_printwatch.core.settings import DetectionSettings
+from octoprint_printwatch.core.shape_check import COARSE_RISE_FACTOR, ShapeResult, profile_growth
+
+
+def box(top, h=80, w=60, left=10, right=50, bottom=70):
+    m = np.zeros((h, w), bool)
+    m[top:bottom, left:right] = True
+    return m
+
+
+def test_a_five_pixel_rise_is_read_only_coarsely():
+    expected_before, expected = box(40), box(35)          # the model rises 5 px (under 1.5 x 4 px)
+    # the fine reading abstains whatever the part did
+    assert profile_growth(box(35), box(40), expected, expected_before, min_rise=4.0) is None
+    assert profile_growth(box(40), box(40), expected, expected_before, min_rise=4.0) is None
+    # the coarse one reads a rising part as rising and a stopped one as stopped
+    rising = profile_growth(box(35), box(40), expected, expected_before, min_rise=4.0, median_factor=COARSE_RISE_FACTOR)
+    stopped = profile_growth(box(40), box(40), expected, expected_before, min_rise=4.0, median_factor=COARSE_RISE_FACTOR)
+    assert rising == 100.0 and stopped == 0.0
+    # under min_rise (3 px) it abstains too: that is edge wobble
+    assert profile_growth(box(37), box(40), box(37), expected_before, min_rise=4.0,
+                          median_factor=COARSE_RISE_FACTOR) is None
+
+
+def view(name, *, growth=None, coarse=None, band_missing=0.0, missing=0.0):
+    return ShapeResult(name, missing, missing, missing, 0.0, band_missing, band_missing, 500, 5000, growth,
+                       (0, 0), 7.0, 50.0, passed=True, usable=True, reasons=[], coarse_growth_pct=coarse)
+
+
+def test_coarse_readings_stand_in_only_where_no_camera_resolves_the_rise():
+    s = DetectionSettings()
+    rose = {"s0": 80.0, "s1": 75.0, "s2": 100.0}            # each view read the part rising at its previous check
+    before = {"s0": 0.0, "s1": 0.0, "s2": 0.0}              # and missed nothing there
+    # two views at 4-5 px per check read no rise now and one misses 4.6 % of the part (s5 038-like): stalled
+    stopped = {"s0": view("s0", coarse=0.0, band_missing=5.7, missing=4.6), "s1": view("s1", coarse=0.0),
+               "s2": view("s2")}
+    verdict, reasons = decide(stopped, {}, s, rise_before=rose, missing_before=before)
+    assert verdict == "fail" and any("not grown as expected" in r for r in reasons)
+    # without the coarse readings (HEAD) nothing could be said
+    assert decide({"s0": view("s0", band_missing=5.7, missing=4.6), "s1": view("s1")}, {}, s,
+                  rise_before=rose, missing_before=before)[0] == "ok"
+    # a coarse rising part does not stall
+    assert decide({"s0": view("s0", coarse=75.0, band_missing=5.7, missing=4.6), "s1": view("s1", coarse=100.0)},
+                  {}, s, rise_before=rose, missing_before=before)[0] == "ok"
+    # a camera that resolves the rise decides: a stopped coarse view next to a rising fine one does not stall
+    assert decide({"s0": view("s0", coarse=0.0, band_missing=30.0, missing=4.6), "s1": view("s1", growth=90.0),
+                   "s2": view("s2", coarse=0.0)}, {}, s, rise_before=rose, missing_before=before)[0] == "ok"
+    # nothing newly missing (a flat rise; a face in the bed's colour that misses as much at every check)
+    assert decide({"s0": view("s0", coarse=0.0), "s1": view("s1", coarse=0.0)}, {}, s,
+                  rise_before=rose, missing_before=before)[0] == "ok"
+    assert decide({"s0": view("s0", coarse=0.0, missing=12.9), "s1": view("s1", coarse=0.0)}, {}, s,
+                  rise_before=rose, missing_before={"s0": 13.8, "s1": 0.0})[0] == "ok"
+    # a view that did not read the part rising at its previous check (it never sees the top rise) does not count
+    assert decide({"s0": view("s0", coarse=0.0, missing=19.9), "s1": view("s1")}, {}, s,
+                  rise_before={"s0": 0.0}, missing_before=before)[0] == "ok"
+    # nor at a closing top
+    assert decide(stopped, {}, s, rise_before=rose, missing_before=before, top_closing=True)[0] == "ok"
