@@ -18,7 +18,8 @@ evaluate`` does (``core.pipeline.evaluate_recording``) and scores it against ``t
   false pause, as is any ``fail`` on a normal print;
 * per-check false-alarm rate = ``fail`` verdicts / checks before any failure started.
 
-Recordings already generated under ``--out`` are reused (``truth.json`` present).
+Recordings already generated under ``--out`` are reused (``truth.json`` present); a folder holds one seed and one
+calibration-error scale only (:func:`folder_recipe`: without ``--seed``/``--calibration-error`` the folder's own).
 """
 from __future__ import annotations
 
@@ -65,6 +66,31 @@ def _evaluate_one(folder: str) -> dict:
 
 
 _MAIN_PID = os.getpid()
+
+
+def folder_recipe(out: Path, seed: int | None, calibration_error: float | None) -> tuple[int, float]:
+    """(seed, calibration-error scale) for the recordings under ``out``: those of the recordings already there,
+    which ``seed`` / ``calibration_error`` (None: not given) must match, else 1 and 1.0.
+
+    Evaluating a folder whose generation has not finished, with another seed, used to fill its missing
+    recordings with that seed: a set of two seeds, scored as one (ninth session, seed 2)."""
+    found: set[tuple[int, float]] = set()
+    for truth_path in sorted(out.glob("*/truth.json")):
+        truth = json.loads(truth_path.read_text())
+        found.add((int(truth["seed"]) // 100000, float(truth["look"]["calibration_error"])))
+    if len(found) > 1:
+        raise SystemExit(f"{out}: holds recordings of several seeds / calibration-error scales {sorted(found)}; "
+                         f"use one folder per set")
+    if found:
+        (have_seed, have_error), = found
+        if (seed is not None and seed != have_seed) or (calibration_error is not None
+                                                        and calibration_error != have_error):
+            raise SystemExit(f"{out}: holds seed {have_seed} at calibration-error scale {have_error:g}, not "
+                             f"seed {seed if seed is not None else have_seed} at "
+                             f"{calibration_error if calibration_error is not None else have_error:g}; "
+                             f"use another --out")
+        return have_seed, have_error
+    return (1 if seed is None else seed), (1.0 if calibration_error is None else calibration_error)
 
 
 def score(truth: dict, checks: list[dict]) -> dict:
@@ -210,9 +236,10 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", required=True, type=Path, help="folder of recordings (created; reused)")
     ap.add_argument("--count", type=int, default=60, help="recordings: a third normal, the rest four failure kinds")
-    ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--calibration-error", type=float, default=1.0, metavar="SCALE",
-                    help="scale of the stated calibration's error (1 = 0.3 deg, 0.6 mm, 1 %% focal, 1.5 px per axis)")
+    ap.add_argument("--seed", type=int, default=None, help="default: the folder's own, else 1")
+    ap.add_argument("--calibration-error", type=float, default=None, metavar="SCALE",
+                    help="scale of the stated calibration's error (1 = 0.3 deg, 0.6 mm, 1 %% focal, 1.5 px per "
+                         "axis; default: the folder's own, else 1)")
     ap.add_argument("--jobs", type=int, default=1, help="processes for generation and evaluation (niced)")
     ap.add_argument("--json", type=Path, help="write every recording's scores and per-check figures here")
     ap.add_argument("--only", help="comma-separated recording names (or name prefixes) to evaluate")
@@ -231,6 +258,7 @@ def main(argv=None) -> int:
         return 0
 
     args.out.mkdir(parents=True, exist_ok=True)
+    args.seed, args.calibration_error = folder_recipe(args.out, args.seed, args.calibration_error)
     kinds = plan_kinds(args.count)
     wanted = args.only.split(",") if args.only else None
     todo = []

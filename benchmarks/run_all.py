@@ -595,7 +595,21 @@ def machine() -> str:
                 break
     except OSError:
         pass
-    return f"{model}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}, {platform.system()}"
+    return (f"{model}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}, {platform.system()}; "
+            f"{library_versions()}")
+
+
+def library_versions() -> str:
+    """The versions of the libraries the detector's figures depend on: the same recordings gave other verdicts
+    under another OpenCV / NumPy / trimesh (docs/detection.md, ninth session)."""
+    from importlib.metadata import PackageNotFoundError, version
+    found = []
+    for name in ("numpy", "opencv-python-headless", "trimesh", "manifold3d", "scipy"):
+        try:
+            found.append(f"{name} {version(name)}")
+        except PackageNotFoundError:
+            found.append(f"{name} not installed")
+    return ", ".join(found)
 
 
 def git_commit() -> str:

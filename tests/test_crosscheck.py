@@ -158,3 +158,24 @@ def test_the_part_lands_where_the_detector_expects_it_with_the_true_camera():
         ys, xs = np.nonzero(ours)
         ye, xe = np.nonzero(expected)
         assert abs(xs.mean() - xe.mean()) < 0.5 and abs(ys.mean() - ye.mean()) < 0.5
+
+
+def test_a_set_folder_keeps_one_seed_and_calibration_error(tmp_path):
+    """Evaluating a folder with another --seed than its recordings' refuses instead of filling the folder's missing
+    recordings with that seed (a seed-2 set was once completed with seed-1 recordings and scored as one set)."""
+    from benchmarks.bench_crosscheck import folder_recipe, main
+    assert folder_recipe(tmp_path, None, None) == (1, 1.0)          # an empty folder: the defaults
+    assert folder_recipe(tmp_path, 4, 2.0) == (4, 2.0)
+    recording = tmp_path / "000_normal"
+    recording.mkdir()
+    (recording / "truth.json").write_text(json.dumps({"seed": 200000, "look": {"calibration_error": 1.0}}))
+    assert folder_recipe(tmp_path, None, None) == (2, 1.0)          # the folder's own seed when none is given
+    with pytest.raises(SystemExit, match="holds seed 2"):
+        main(["--out", str(tmp_path), "--seed", "1", "--count", "3", "--generate-only"])
+    with pytest.raises(SystemExit, match="calibration-error scale 1"):
+        folder_recipe(tmp_path, 2, 3.0)
+    other = tmp_path / "001_runout"
+    other.mkdir()
+    (other / "truth.json").write_text(json.dumps({"seed": 100001, "look": {"calibration_error": 1.0}}))
+    with pytest.raises(SystemExit, match="several seeds"):
+        folder_recipe(tmp_path, None, None)
