@@ -33,6 +33,12 @@ VIEWPOINT_APART_DEG = 30.0
 #: pixels it changes in its cameras together: a camera that sees (almost) nothing change there neither
 #: confirms nor contradicts it, so it is no second view of the shift.
 VIEWPOINT_MIN_SHARE = 0.15
+#: ... but a side (``LayerShift.sides``: is the shift's vertical image move read?) counts where its cameras see at least
+#: this many of the pixels the shift changes, whatever their share: the question there is not whether that side adds
+#: evidence of its own but whether a camera on another side has the band in view to speak against "the part stands
+#: taller or lower" (the pooled null, one height in every view): a view that sees the top of a wide part from above
+#: changes ten times the pixels a low side view does (cross-check seed 6 `055`: 120-160 px of ~1,050, 11-15 %).
+SIDE_MIN_MOVED_PX = 60.0
 #: Contradicting pixels allowed, as a share of the confirming ones.
 SHIFT_AGAINST = 0.25
 #: The shift must explain the image at least this much better than "the part stands a little taller
@@ -130,7 +136,8 @@ class LayerShift:
     moved_sure : of ``moved``, the pixels decided (material or bed) or beyond the alignment tolerance of the
         moved band's outline (see SHIFT_OVERHANG_SHARE).
     opposite : the evidence for the move the other way (estimate_layer_shift only; see SHIFT_OPPOSITE_MAX).
-    sides : as ``viewpoints``, but cameras on opposite sides of the part count apart.
+    sides : as ``viewpoints``, but cameras on opposite sides of the part count apart, and a side counts with
+        SIDE_MIN_MOVED_PX changed pixels whatever its share.
     vertical : whether a camera counted the shift's vertical image move too (only when cameras on two or more
         sides see it: one side cannot tell a band moved along its line of sight from a taller part).
     """
@@ -415,7 +422,8 @@ def _pooled(views: Mapping[str, BandShift], grid: np.ndarray, vertical: bool = T
                       null_score=float(null[best]), moved_by=share, overhang=int(round(total[3, best])),
                       moved_sure=int(round(total[4, best])),
                       viewpoints=count_viewpoints(looking, share, min_share),
-                      sides=count_viewpoints(looking, share, min_share, period=2 * np.pi), vertical=vertical)
+                      sides=count_viewpoints(looking, share, min(min_share, SIDE_MIN_MOVED_PX), period=2 * np.pi),
+                      vertical=vertical)
 
 
 def _height_null(cameras: Mapping[str, tuple[np.ndarray, np.ndarray, float]]) -> np.ndarray:
@@ -437,7 +445,10 @@ def _height_null(cameras: Mapping[str, tuple[np.ndarray, np.ndarray, float]]) ->
             tolerant = np.maximum(tolerant, np.maximum(np.r_[scores[e:], np.full(e, -np.inf)],
                                                        np.r_[np.full(e, -np.inf), scores[:-e]]))
         dy = np.rint(heights * k).astype(int)
-        scores_at.append(np.where(np.abs(dy) <= r, tolerant[np.clip(dy + r, 0, 2 * r)], 0.0))
+        # a height beyond this camera's reach moves its top further than it tested: it reads that height as it
+        # reads its reach's end (a top seen in place contradicts a taller part more, the further it stands), not
+        # as nothing, which let one camera's null stand alone for heights the other camera refutes
+        scores_at.append(tolerant[np.clip(dy + r, 0, 2 * r)])
         weights.append(weight)
     # (n, heights): a sum of outer products, not a matrix product: a product this size wakes BLAS's thread
     # pool, whose threads then spin on the other core and slowed the next checks' shape tests by ~15 % CPU
