@@ -401,6 +401,12 @@ def render_depth(mesh_or_part: Any, camera: Camera, z: float | None = None, *, d
     return _depth_and_height(_mesh_at(mesh_or_part, z), camera)[0 if distorted else 2]
 
 
+def render_heights(mesh_or_part: Any, camera: Camera, z: float | None = None) -> np.ndarray:
+    """(h, w) float32 printer Z (mm) of the visible surface of the part up to ``z``, in the camera's own
+    (distorted) image; NaN where empty."""
+    return _depth_and_height(_mesh_at(mesh_or_part, z), camera)[1]
+
+
 def _depth_and_height(mesh: trimesh.Trimesh, camera: Camera):
     """(depth distorted, printer Z distorted, depth undistorted, printer Z undistorted)."""
     K, pad, size = _canvas(camera)

@@ -13,7 +13,8 @@ DATA = Path(__file__).resolve().parents[1] / "data" / "recordings"
 
 
 def _pair_checks(document):
-    return [(check["layer"], check["size"]["cam0L+cam0R"]) for check in document["checks"]]
+    # every recording here has one pair
+    return [(check["layer"], next(iter(check["size"].values()))) for check in document["checks"]]
 
 
 def test_a_skirt_beside_a_low_part_is_not_read_as_its_width():
@@ -40,3 +41,43 @@ def test_not_finding_the_top_of_a_poorly_seen_part_is_no_evidence_that_it_is_mis
         assert size["error_pct"] is None or size["error_pct"] <= size["threshold_pct"], (layer, size)
     layer, size = _pair_checks(document)[1]
     assert size["abstained"] and "poorly seen" in size["reason"], size
+
+
+def _stalled_copy(source: Path, target: Path) -> Path:
+    """The recording with its last check's frames replaced by the check before's: the part stopped
+    growing between them (a runout), everything else as recorded."""
+    import json
+    import shutil
+
+    shutil.copytree(source, target)
+    session = json.loads((target / "session.json").read_text())
+    session["checks"][-1]["frames"] = dict(session["checks"][-2]["frames"])
+    (target / "session.json").write_text(json.dumps(session))
+    return target
+
+
+def test_a_tier_seen_inside_its_wider_base_is_not_taken_for_missing_while_it_grows():
+    # translucent blue "stack" (cross-check simulator, seed 6, 010_normal): a 16-mm cylinder on a 54-mm
+    # box, both seen from above, so in both views the cylinder lies inside the box's silhouette and gives
+    # no outline; the outline stereo found nothing at 36 mm ("top found at 24.0 mm"): 100 %, a pause
+    document = evaluate_recording(load_recording(DATA / "stack_tier_inside_pair"))
+    assert [c["verdict"] for c in document["checks"]] == ["ok", "ok", "ok", "ok"]
+    for layer, size in _pair_checks(document):
+        assert size["error_pct"] is None or size["error_pct"] <= size["threshold_pct"], (layer, size)
+    layer, size = _pair_checks(document)[-1]
+    assert size["abstained"] and "inside lower, wider material" in size["reason"], size
+    # the model itself gives no outline there, and both views saw the cylinder's wall grow
+    assert size["rectification"]["model_outline_in_band"] == 0, size
+    assert min(size["rectification"]["changed_where_new"]) >= 0.05, size
+
+
+def test_a_tier_seen_inside_its_wider_base_that_stopped_growing_is_still_caught(tmp_path):
+    # the same print with its last picture the previous check's (the cylinder stopped at 33.6 mm while
+    # the model is at 36 mm): nothing changed where the model's newest band lies, so "nothing
+    # reconstructed at the current height" still holds (as on seed 6's 036_runout, a tier that never came)
+    stalled = _stalled_copy(DATA / "stack_tier_inside_pair", tmp_path / "rec")
+    document = evaluate_recording(load_recording(stalled))
+    layer, size = _pair_checks(document)[-1]
+    assert size["error_pct"] == 100.0 and "nothing reconstructed at the current height" in size["reason"], size
+    assert max(size["rectification"]["changed_where_new"]) < 0.05, size
+    assert document["checks"][-1]["verdict"] == "fail"

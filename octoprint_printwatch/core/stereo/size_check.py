@@ -32,7 +32,7 @@ import cv2
 import numpy as np
 
 from ..camera import Camera
-from ..render import render_silhouette
+from ..render import render_heights, render_silhouette
 from .matching import MATCHERS, MatchSettings, compute_disparity
 from .rectify import (RECTIFICATIONS, Rectification, align_on_bed, phase_shift, predict_disparity_range,
                       rectify_calibrated, rectify_seed, rectify_uncalibrated, refine_vertical, sift_matches)
@@ -40,6 +40,20 @@ from .tangents import Sections, half_contrast_edges, plane_height, tangent_offse
 from .triangulate import seed_triangulate_cameras, triangulate_general
 
 TRIANGULATIONS = ("general", "seed")
+#: Where the model itself, rendered and reconstructed the same way, gives fewer outline points than this
+#: in the band (its material at the current height stands inside lower, wider material in a view), the
+#: seed's "nothing reconstructed at the current height" is no evidence by itself: it is not held when in
+#: both views the picture changed since the previous check on at least MIN_CHANGED_FRACTION of the
+#: model's newest band (five times the 1 % the part's older surface gives by construction): the part
+#: grew there.
+MIN_EXPECTED_OUTLINE = 4
+MIN_CHANGED_FRACTION = 0.05
+#: the newest band is looked for this far (px) around where the model puts it (the calibration's residual)
+NEW_BAND_REACH_PX = 4
+#: and this far (px) inside the part's silhouette (the bed's noise and the shake at the outline)
+INSIDE_PX = 4
+#: a change of fewer grey levels is JPEG's quantisation
+CHANGE_FLOOR = 4.0
 #: 'rims': silhouette-edge stereo on rectified rows; 'dense': the matcher's points (the seed's way);
 #: 'hybrid': height on the plane of the top, width from the tangent planes (tangents.py).
 MEASURES = ("hybrid", "rims", "dense")
@@ -256,6 +270,8 @@ class PairSizeCheck:
         self._rect: Rectification | None = None
         self._rect_plain: Rectification | None = None
         self._bed_note = ""
+        #: the previous measured check: (z, (left frame, right frame)), moved back like the masks
+        self._previous: tuple[float, tuple[np.ndarray, np.ndarray]] | None = None
         box = _box_points(self.footprint, 0.0, self.top + 3.0, 6.0)
         self.roi_left, self.roi_right = _roi(left, box), _roi(right, box)
         #: per camera, where flat material on the bed near the part (skirt, brim, shadow) can show
@@ -331,7 +347,8 @@ class PairSizeCheck:
     # ------------------------------------------------------------ hybrid
     def _hybrid(self, result: SizeResult, views, z: float, exp_height: float, exp_width: float | None,
                 tol_z: float, shift_left, shift_right, rim_height: float | None, dense_height: float | None,
-                anything: bool, stereo_widths, started: float) -> SizeResult:
+                anything: bool, stereo_widths, started: float, model_outline_in_band=None,
+                grew_inside=None) -> SizeResult:
         """The default measurement and verdict (docs/stereo.md, steps 4-6).
 
         Height on the plane of the top and width from the tangent planes (tangents.py), each camera
@@ -449,6 +466,24 @@ class PairSizeCheck:
             seed_rule = False
             notes.append("nothing reconstructed at the current height, not held: both views see the part "
                          "narrower than the model (poorly seen)")
+        if seed_rule and model_outline_in_band is not None:
+            expected_points = model_outline_in_band()
+            diag["model_outline_in_band"] = expected_points
+            changed = None if expected_points >= MIN_EXPECTED_OUTLINE or grew_inside is None else grew_inside()
+            diag["changed_where_new"] = None if changed is None else [round(c, 3) for c in changed]
+            if changed is not None and min(changed) >= MIN_CHANGED_FRACTION:
+                # The model itself, printed as sliced, gives (almost) no outline at this height: its material
+                # here stands inside the silhouette of lower, wider material in a view (a narrow tier on a
+                # wide base seen from above), where the outline stereo cannot see it and only the matched
+                # points could (none on an untextured part). Not finding it is then no evidence that it is
+                # missing, and both views saw the picture change where the model's newest band lies: the
+                # part grew there. (A 16-mm tier on a 54-mm base paused a normal print on cross-check
+                # seed 6; where that tier never came -- a runout -- the pictures do not change and the rule
+                # still holds.)
+                seed_rule = False
+                notes.append("nothing reconstructed at the current height, not held: the model's material there "
+                             "is inside lower, wider material in the views (no outline), and both views changed "
+                             "where it is new (" + ", ".join(f"{100 * c:.0f} %" for c in changed) + ")")
         if seed_rule:
             # the seed's rule: the part is there (outline points were reconstructed), but nothing at
             # the current height. (Tried: not when a camera's upper edge reaches z; it removed a
@@ -495,6 +530,35 @@ class PairSizeCheck:
         result.reason = "; ".join(notes)
         result.seconds = time.perf_counter() - started
         return result
+
+    def _changed_where_new(self, previous, current, z: float) -> list[float] | None:
+        """Per camera, the fraction of the pixels where the model's visible surface was printed since the
+        previous check (within :data:`NEW_BAND_REACH_PX`, and at least :data:`INSIDE_PX` inside the
+        part's silhouette, away from the bed's noise and the shake at the outline) whose picture changed
+        since then, beyond what the part's older visible surface shows: its 99th percentile, or
+        :data:`CHANGE_FLOOR` grey levels (JPEG's quantisation), after matching the exposure on that surface.
+        About 1 % where nothing was printed; where the part grew, the newest band's edge moved there.
+        None when there is no previous check below ``z`` or too few pixels to tell."""
+        z_prev, before = previous
+        if not z_prev < z:
+            return None
+        out = []
+        for cam, b, c in zip((self.left, self.right), before, current):
+            if b.shape != c.shape:
+                return None
+            b, c = _grey(b), _grey(c)
+            heights = np.nan_to_num(render_heights(self.mesh, cam, min(z, self.top)), nan=-np.inf)
+            new = (heights > z_prev + 1e-3).astype(np.uint8)
+            inside = cv2.erode((heights > 0).astype(np.uint8), _disc(INSIDE_PX)) > 0
+            zone = inside & (cv2.dilate(new, _disc(NEW_BAND_REACH_PX)) > 0)
+            old = inside & (cv2.dilate(new, _disc(NEW_BAND_REACH_PX + 4)) == 0)
+            if zone.sum() < 20 or old.sum() < 100:
+                return None
+            gain = float(np.median(c[old])) / max(float(np.median(b[old])), 1.0)
+            change = np.abs(c - gain * b)
+            limit = max(float(np.quantile(change[old], 0.99)), CHANGE_FLOOR)
+            out.append(float(np.mean(change[zone] > limit)))
+        return out
 
     def _anchor_heights(self, planes, views, z: float, dy_now) -> bool:
         """Learn each camera's vertical offset at the part's top, once per job.
@@ -590,6 +654,12 @@ class PairSizeCheck:
             frame_right = self.stabilise(frame_right, "right")
             self.aligned_on_part = False
 
+        current = (frame_left, frame_right)
+        previous, self._previous = self._previous, (float(z), current)
+
+        def grew_inside() -> list[float] | None:
+            return None if previous is None else self._changed_where_new(previous, current, z)
+
         rect = self.rectification(frame_left, frame_right, aligned=self.aligned_on_part)
         result.rectification = rect.summary()
         result.rectification["aligned_on_part"] = self.aligned_on_part
@@ -629,6 +699,34 @@ class PairSizeCheck:
                 (points[ok, 2] > 0.3) & (points[ok, 2] < z + tol_z)
             return ok
 
+        def outline_points(rows, a_l, b_l, a_r, b_r):
+            """Silhouette-edge stereo of the outline on common rectified rows: (points, side 0/1, in band)."""
+            # Where the outline runs along the rows (the top and bottom of the silhouette) its match is
+            # ill-posed: a row error of a pixel moves it by many pixels. Keep steep outline only. Each
+            # outline point stands on its own: rows may cut the part obliquely when the baseline tilts.
+            steep_a = _steep(a_l, rows) & _steep(a_r, rows)
+            steep_b = _steep(b_l, rows) & _steep(b_r, rows)
+            rims = np.vstack([to_printer(a_l[steep_a], rows[steep_a], a_r[steep_a]),
+                              to_printer(b_l[steep_b], rows[steep_b], b_r[steep_b])])
+            side = np.r_[np.zeros(int(steep_a.sum()), int), np.ones(int(steep_b.sum()), int)]
+            # Tangent rays of different edges (a box's corners) meet outside the part: the outline is
+            # gated loosely around the footprint for the height, tightly for the width.
+            kept = in_volume(rims, margin=12.0)
+            rims, side = rims[kept], side[kept]
+            in_band = (rims[:, 2] >= z - s.band_mm - tol_z) & (rims[:, 2] <= z + tol_z) & \
+                _inside_polygon(_grow_polygon(self.footprint, 4.0), rims[:, :2])
+            return rims, side, in_band
+
+        def model_outline_in_band() -> int:
+            """How many outline points the model itself, printed up to ``z``, gives in the band. The frames
+            were moved back to where the calibrated cameras see the model, so it is rendered there. (Almost) none
+            where its material at this height lies, in a view, inside the silhouette of lower and wider
+            material (a narrow tier on a wide base seen from above): the outline stereo cannot see it."""
+            sils = [rect.warp(render_silhouette(self.mesh, cam, min(z, self.top)).astype(np.float32), which)
+                    for cam, which in ((self.left, "left"), (self.right, "right"))]
+            outline = silhouette_rims(*sils)
+            return 0 if len(outline[0]) < 4 else int(outline_points(*outline)[2].sum())
+
         rim_height = rim_width = dense_height = dense_width = None
         rim_any = dense_any = False
         if s.measure in ("rims", "hybrid") and mask_left is not None and mask_right is not None:
@@ -646,18 +744,7 @@ class PairSizeCheck:
                 return abstain("the part's outline is not seen on common rows by both cameras")
             if not (dmin - 20 <= np.median(a_l - a_r) <= dmax + 20):
                 return abstain("the two silhouettes do not correspond (disparity out of range)")
-            # Where the outline runs along the rows (the top and bottom of the silhouette) its match is
-            # ill-posed: a row error of a pixel moves it by many pixels. Keep steep outline only. Each
-            # outline point stands on its own: rows may cut the part obliquely when the baseline tilts.
-            steep_a = _steep(a_l, rows) & _steep(a_r, rows)
-            steep_b = _steep(b_l, rows) & _steep(b_r, rows)
-            rims = np.vstack([to_printer(a_l[steep_a], rows[steep_a], a_r[steep_a]),
-                              to_printer(b_l[steep_b], rows[steep_b], b_r[steep_b])])
-            side = np.r_[np.zeros(int(steep_a.sum()), int), np.ones(int(steep_b.sum()), int)]
-            # Tangent rays of different edges (a box's corners) meet outside the part: the outline is
-            # gated loosely around the footprint for the height, tightly for the width.
-            kept = in_volume(rims, margin=12.0)
-            rims, side = rims[kept], side[kept]
+            rims, side, in_band = outline_points(rows, a_l, b_l, a_r, b_r)
             result.n_points = len(rims)
             if keep_points:
                 result.points = rims
@@ -665,8 +752,6 @@ class PairSizeCheck:
                 return abstain(f"only {len(rims)} outline points reconstructed over the part")
             # Printed height: the top of the part's steep outline (its top corners).
             rim_height = dense_top(rims[:, 2], window_mm=0.5, min_count=5)
-            in_band = (rims[:, 2] >= z - s.band_mm - tol_z) & (rims[:, 2] <= z + tol_z) & \
-                _inside_polygon(_grow_polygon(self.footprint, 4.0), rims[:, :2])
             rim_any = bool(in_band.any())
             # A width needs both sides of the outline at this height.
             if min((in_band & (side == 0)).sum(), (in_band & (side == 1)).sum()) >= 2:
@@ -705,7 +790,8 @@ class PairSizeCheck:
         if s.measure == "hybrid":
             views = [(self.left, mask_left, diffs[0]), (self.right, mask_right, diffs[1])]
             return self._hybrid(result, views, z, exp_height, exp_width, tol_z, shift_left, shift_right,
-                                rim_height, dense_height, rim_any or dense_any, (rim_width, dense_width), started)
+                                rim_height, dense_height, rim_any or dense_any, (rim_width, dense_width),
+                                started, model_outline_in_band, grew_inside)
         if s.measure == "rims":
             height, width, anything = rim_height, rim_width, rim_any
         else:
@@ -866,6 +952,16 @@ def foreground_mask(background: np.ndarray, frame: np.ndarray, prior: np.ndarray
     evidence = material_evidence(background[crop], frame[crop], prior[crop], ~near[crop])
     out[crop] = clean_mask(evidence.material)
     return out
+
+
+def _disc(radius: int) -> np.ndarray:
+    return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * radius + 1, 2 * radius + 1))
+
+
+def _grey(frame: np.ndarray) -> np.ndarray:
+    """(h, w) float32 grey of a frame, lightly smoothed (JPEG noise)."""
+    grey = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY) if frame.ndim == 3 else frame
+    return cv2.GaussianBlur(grey.astype(np.float32), (3, 3), 0)
 
 
 def _difference(frame: np.ndarray, background: np.ndarray | None) -> np.ndarray | None:
