@@ -91,13 +91,32 @@ def outline_zone(expected: np.ndarray, tolerance: float, top_tolerance: float = 
     return grown
 
 
-def reaching_in_from_above(objects: np.ndarray, search: np.ndarray, expected: np.ndarray) -> np.ndarray:
+#: An object hangs where a foreign object hung at the previous check when this share of its material lies
+#: there (grown by FOREIGN_BEFORE_REACH_PX): the parked hotend, followed as its image enters the search box.
+FOREIGN_BEFORE_SHARE = 0.5
+FOREIGN_BEFORE_REACH_PX = 5
+#: ... and only while its material keeps this far (px) from the expected part's outline: the parked head
+#: hangs apart from the part, while a piece of the part knocked over leans on its outline.
+FOREIGN_APART_PX = 5
+
+
+def reaching_in_from_above(objects: np.ndarray, search: np.ndarray, expected: np.ndarray,
+                           material: np.ndarray | None = None, before: np.ndarray | None = None) -> np.ndarray:
     """(h, w) bool: the pixels of ``objects`` in blobs that reach in from above the ``search`` box and hang
     there, which are not the print's (the parked hotend, the gantry, a hand).
 
     A blob counts when 15 % of its pixels lie beyond the box and 5 % above its top edge (a part sliding out
     sideways is the print's), and it does not reach down into the ``expected`` part's lowest quarter (a part
     that tipped over and stands taller than the box does).
+    ``before`` ((h, w) bool, the same coordinates): the material of the objects found foreign at the
+    camera's previous check; ``material`` ((h, w) bool): the pixels of ``objects`` that are material (the rest
+    are merely not confidently bed). A blob whose material lies (FOREIGN_BEFORE_SHARE) where one of them
+    hung, and keeps apart from the ``expected`` outline (FOREIGN_APART_PX), is the same object, a check's rise
+    further on, and still foreign, however much of it now lies inside the box: the parked hotend rises with
+    every check while the box's top rises with the part, and from some views its image enters the box whole.
+    For such a followed object the foot rule is read on its material: the weak pixels grouped with it below
+    (its shadow or mirror image on glass) are no foot, while a piece of the part knocked over leans on the
+    outline (and its first reading, with the weak pixels, already kept it as the print's).
     """
     out = np.zeros(objects.shape, bool)
     box = bounding_box(objects)
@@ -115,11 +134,27 @@ def reaching_in_from_above(objects: np.ndarray, search: np.ndarray, expected: np
     beyond = np.bincount(labels[~search[inner]], minlength=count)
     from_above = np.bincount(labels[above], minlength=count)
     foreign = (beyond >= 0.15 * np.maximum(area, 1)) & (from_above >= 0.05 * np.maximum(area, 1))
+    followed = np.zeros(count, bool)
+    if before is not None and before.any():
+        held = objects[inner] if material is None else material[inner] & objects[inner]
+        there = held & dilate(before, FOREIGN_BEFORE_REACH_PX)[inner]
+        total = np.bincount(labels[held], minlength=count)
+        near_part = np.bincount(labels[held & dilate(expected, FOREIGN_APART_PX)[inner]], minlength=count)
+        followed = ((total > 0) & (near_part == 0)
+                    & (np.bincount(labels[there], minlength=count) >= FOREIGN_BEFORE_SHARE * np.maximum(total, 1)))
     rows = np.flatnonzero(expected.any(axis=1))
     if rows.size:
         foot_zone = rows[-1] - 0.25 * (rows[-1] - rows[0])
         lowest = y0 + stats[:, cv2.CC_STAT_TOP] + stats[:, cv2.CC_STAT_HEIGHT] - 1
         foreign &= lowest < foot_zone
+        if material is not None and followed.any():
+            # (a blob without material pixels keeps its own extent: it counts in no figure anyway)
+            ys, xs = np.nonzero(material[inner] & (labels > 0))
+            deepest = np.full(count, -1, np.int64)
+            np.maximum.at(deepest, labels[ys, xs], ys + y0)
+            lowest = np.where(deepest >= 0, deepest, lowest)
+        followed &= lowest < foot_zone
+    foreign |= followed
     foreign[0] = False
     out[inner] = foreign[labels]
     return out

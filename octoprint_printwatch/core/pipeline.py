@@ -701,6 +701,9 @@ class CameraState:
     #: already (once per print)
     pending_offset: tuple[int, int] | None = None
     offset_abstained: bool = False
+    #: (h, w) bool: the objects it found reaching in from above the search box at the previous check (the
+    #: parked hotend; None: none, or not usable there)
+    last_foreign: np.ndarray | None = None
 
 
 class CheckRunner:
@@ -777,6 +780,7 @@ class CheckRunner:
                 # once its band read solid, a camera's band coverage is read only where the part stalls
                 band_coverage_wanted=((state.band_coverage or 0.0) < SOLID_MIN_COVERAGE
                                       or settings.min_growth_pct >= STALL_READ_BELOW_GROWTH_PCT),
+                foreign_before=state.last_foreign,
             )
             result = check_shape(**shape_args, candidates=state.shift_candidates, track_candidates=True)
             result = not_decisive_where_calibrated(result, shape_args)
@@ -835,6 +839,7 @@ class CheckRunner:
             state.last_rise = (None if r is None or not r.usable
                                else r.growth_pct if r.growth_pct is not None else r.coarse_growth_pct)
             state.last_missing = r.missing_pct if r is not None and r.usable else None
+            state.last_foreign = r.foreign_mask if r is not None and r.usable else None
         self.previous_z = z
         return CheckResult(layer=int(layer), z=float(z), verdict=verdict, shape_error_pct=errors, shape=shape,
                            size=size, reasons=reasons, seconds=time.perf_counter() - started,

@@ -155,6 +155,9 @@ class ShapeResult:
     #: this camera's first usable look at the part (no material mask of an earlier check to compare with)
     first_look: bool = False
     observed_mask: np.ndarray | None = field(default=None, repr=False)   # (h, w) bool, full frame
+    #: (h, w) bool, full frame: the material of the objects found reaching in from above the search box (the
+    #: parked hotend; masks.reaching_in_from_above), None when there were none: the next check follows them
+    foreign_mask: np.ndarray | None = field(default=None, repr=False)
     #: (k, 2) int (dx, dy): the shifts this check could not tell apart, within the ``candidates`` given
     #: (see align_candidates), and the best of them; None when not asked for
     shift_candidates: np.ndarray | None = field(default=None, repr=False)
@@ -315,13 +318,23 @@ def material_evidence(
     # a shadow of the parked head or gantry that lay here in the background frame and has moved away
     # brightens the bed without changing its colour or pattern (core/shadows.py): a weak cue there, like
     # darkening
+    # ... on the part only a grain match tells the bed from a lit face in the bed's colour; a part whose
+    # colour differs from the bed's (its pixels at the previous check changed chromaticity) has no such face
+    grain_needed = prior if part is None else part
+    if previous is not None:
+        seen = previous & prior
+        if int(seen.sum()) >= 50 and float(np.median(z["chroma"][seen])) > material_factor:
+            grain_needed = np.zeros_like(prior)
     bright_strong = np.where(shadow_left(luma_f, luma_b, sample, noise["bright"], material_factor,
                                          where=(z["bright"] > material_factor) & (chroma_strong <= material_factor),
-                                         min_ratio=SHADOW_MIN_RATIO, prior=prior if part is None else part,
+                                         min_ratio=SHADOW_MIN_RATIO, prior=grain_needed,
                                          surroundings=prior),
                              0.0, z["bright"])
     strong = np.maximum(chroma_strong, bright_strong)
-    weak = np.maximum(np.maximum(z["dark"], z["texture"]), np.maximum(z["bright"], z["chroma"]))
+    # (a shadow that left, where the bed's grain shows through, is the bed even inside the prior: a part
+    # there would hide the grain; counting it kept a stalled part's missing top "seen" under the head's
+    # old shadow)
+    weak = np.maximum(np.maximum(z["dark"], z["texture"]), np.maximum(bright_strong, z["chroma"]))
     strong_material = (strong > material_factor) | deep_dark
     material = strong_material | ((weak > material_factor) & prior)
     if previous is not None:
@@ -787,6 +800,9 @@ class Comparison:
     band_extra: int
     band_pixels: int
     band_core_pixels: int
+    #: the material of the objects found reaching in from above the search box (the parked hotend), for
+    #: the next check
+    foreign: np.ndarray | None = None
 
 
 def _not_a_mark(observed: np.ndarray, last_observed: np.ndarray, expected: np.ndarray, previous: np.ndarray,
@@ -817,6 +833,7 @@ def compare_masks(
     top_tolerance: float = 0.0,
     linked: np.ndarray | None = None,
     not_the_prints: Callable[[np.ndarray], np.ndarray] | None = None,
+    foreign_before: np.ndarray | None = None,
 ) -> Comparison:
     """Missing and extra material (see module docstring); all inputs (h, w) bool, already aligned.
 
@@ -833,20 +850,24 @@ def compare_masks(
     quarter is never foreign (a tipped part stands on the bed). ``not_the_prints`` ((h, w) bool extra ->
     (h, w) bool) marks blobs of the extra material that are something else, found with what these masks
     cannot show (the frame's colours, the full frame); they are left out of every figure.
+    ``foreign_before`` ((h, w) bool): the objects found foreign at the camera's previous check
+    (:attr:`Comparison.foreign`): an object where one hung then is still one (masks.reaching_in_from_above).
     """
     core = erode(expected, tolerance)
     missing = core & bed & ~observed
     missing = cv2.morphologyEx(missing.astype(np.uint8), cv2.MORPH_OPEN, _KERNEL3).astype(bool)
     grown = outline_zone(expected, tolerance, top_tolerance)
     outside = observed & ~grown
-    objects = None
+    objects = foreign = None
     if outside.any():
         # Something reaching in from outside the search box (the parked hotend, the gantry, a hand) is not
         # the print's. Objects are grouped on everything not confidently bed (``linked``): the parked
         # hotend's nozzle stays one object with its dark, weakly seen body even when only the nozzle is
         # certain material.
         objects = outside if linked is None else (outside | (linked & ~grown))
-        outside &= ~reaching_in_from_above(objects, search, expected)
+        foreign = reaching_in_from_above(objects, search, expected, material=outside, before=foreign_before)
+        outside &= ~foreign
+        foreign &= observed        # (followed on its material: not on the shadow or mirror image it links)
     extra = (outside & search).astype(np.uint8)
     # close first so a tangle of thin strands becomes one blob, then drop what is still thinner
     # than ~5 px (strings, a skirt line softened by JPEG)
@@ -903,6 +924,7 @@ def compare_masks(
         band_extra=int(np.count_nonzero(extra & near_band)),
         band_pixels=int(band.sum()),
         band_core_pixels=int(band_core.sum()),
+        foreign=foreign,
     )
 
 
@@ -960,6 +982,7 @@ def check_shape(
     candidates: np.ndarray | None = None,
     track_candidates: bool = False,
     band_coverage_wanted: bool = True,
+    foreign_before: np.ndarray | None = None,
 ) -> ShapeResult:
     """Shape check of one camera (module docstring). Images (h, w, 3) uint8 BGR of the camera's size.
 
@@ -971,6 +994,8 @@ def check_shape(
     ``band_shift``, is pooled over the cameras by ``core.layer_shift.estimate_layer_shift``).
     ``band_coverage_wanted`` False measures the newest band's part coverage (core/nest.py) only where the
     part did not visibly grow: the caller has seen this camera's band solid, and only a stalled part's is read.
+    ``foreign_before`` ((h, w) bool, full frame): the objects this camera found reaching in from above the
+    search box at its previous check (:attr:`ShapeResult.foreign_mask`; the parked hotend).
     """
     h, w = regions.silhouette.shape
     if frame.shape[:2] != (h, w):
@@ -1079,7 +1104,10 @@ def check_shape(
     comparison = compare_masks(observed, bed_evidence, expected_a, band_a, search_a,
                                dont_care_a, tol, band_reach=max(2 * tol, shift_bound),
                                flat_max_px=regions.flat_max_px, reflection=reflection_a,
-                               top_tolerance=tol, linked=~evidence.bed, not_the_prints=not_the_prints)
+                               top_tolerance=tol, linked=~evidence.bed, not_the_prints=not_the_prints,
+                               foreign_before=(foreign_before[crop].astype(bool)
+                                               if foreign_before is not None and foreign_before.shape == (h, w)
+                                               else None))
 
     # Growth since the previous check: the same camera, the same processing, so calibration and
     # alignment errors cancel; a part that stopped growing (runout, clog, spaghetti) shows none of the
@@ -1192,6 +1220,10 @@ def check_shape(
 
     observed_full = np.zeros((h, w), bool)
     observed_full[crop] = observed
+    foreign_full = None
+    if comparison.foreign is not None and comparison.foreign.any():
+        foreign_full = np.zeros((h, w), bool)
+        foreign_full[crop] = comparison.foreign
     result = ShapeResult(
         camera=camera, error_pct=error_pct, raw_error_pct=raw_error_pct, missing_pct=missing_pct,
         extra_pct=extra_pct, band_error_pct=band_error, band_missing_pct=band_missing,
@@ -1202,7 +1234,7 @@ def check_shape(
         decisive=decisive, shift_candidates=shift_candidates, best_candidate=best_candidate,
         new_outside=new_outside, moved_px=moved_px, first_look=last_observed is None,
         background_missing_pct=background_missing_pct, background_band_missing_pct=background_band_missing_pct,
-        band_part_coverage=band_coverage, coarse_growth_pct=coarse_growth_pct,
+        band_part_coverage=band_coverage, coarse_growth_pct=coarse_growth_pct, foreign_mask=foreign_full,
     )
     if keep_pictures:
         full = np.zeros((h, w), bool)

@@ -151,3 +151,25 @@ def test_coverage_reads_how_far_a_pixel_moved_towards_the_parts_colour():
                       [136, 66, 21],                                     # the tinted shadow: bluer
                       [40, 120, 230]], np.float32)                       # the part
     assert coverage_by_part(frame, bed, palette) == pytest.approx([0.5, 0.0, 0.0, 1.0], abs=0.12)
+
+
+def test_bare_bed_where_a_stalled_part_should_have_risen_under_a_shadow_that_left_is_not_material():
+    """Runout under the head's old shadow (cross-check seed 6 ``048_runout``): the background frame had the
+    parked head's shadow over where the part now should be; the part stopped growing, so the top of its
+    expected outline shows the bed, lit again. On a bed without grain only the part's colour tells: a part
+    whose pixels differ in colour from the bed has no lit face that passes for the bed brightened."""
+    bed = bed_texture(colour=(140, 160, 150), grain=1.0)
+    printed = Box(110, 125, 210, 170)                       # stopped 45 rows below the expected top (PART)
+    old_shadow = Box(100, 40, 220, 118)                     # half of it beyond the part's surroundings
+    background = camera_effects(darken(bed, old_shadow.mask(), 0.5), seed=11)
+    frame = camera_effects(darken(paint_part(bed, printed), NEW_SHADOW.mask(), 0.5), shake=(1, 0))
+    prior = PART.moved(0, -10).mask() | PART.moved(0, 10).mask()
+    top = Box(115, 85, 205, 118).mask()                     # bare bed inside the expected outline
+    ev = material_evidence(background, frame, prior, SAMPLE, previous=printed.mask(), part=PART.mask())
+    assert ev.material[top].mean() < 0.1
+    assert ev.material[Box(115, 130, 205, 165).mask()].mean() > 0.95      # the part itself
+    # a part in the bed's own colour: its lit face might be the bed brightened, so there it stays material
+    alike = camera_effects(darken(paint_part(bed, printed, colour=(140, 160, 150)), NEW_SHADOW.mask(), 0.5),
+                           shake=(1, 0))
+    ev_alike = material_evidence(background, alike, prior, SAMPLE, previous=printed.mask(), part=PART.mask())
+    assert ev_alike.material[top].mean() > 0.5
