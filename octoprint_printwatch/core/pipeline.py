@@ -704,6 +704,18 @@ class CameraState:
     #: (h, w) bool: the objects it found reaching in from above the search box at the previous check (the
     #: parked hotend; None: none, or not usable there)
     last_foreign: np.ndarray | None = None
+    #: the shift whose upper outline matched the observed one at its first usable look, where that look's
+    #: alignment chose a shift further than OUTLINE_DISAGREES_PX from it (None: they agreed, or no look yet):
+    #: a first look's tie-break the outline contradicts (CheckRunner._second_look)
+    first_look_outline: tuple[int, int] | None = None
+
+
+#: A first look's chosen shift and its upper-outline match disagree beyond this many pixels (either axis)
+OUTLINE_DISAGREES_PX = 2
+
+
+def _px_apart(a: tuple[int, int], b: tuple[int, int]) -> int:
+    return max(abs(int(a[0]) - int(b[0])), abs(int(a[1]) - int(b[1])))
 
 
 class CheckRunner:
@@ -786,6 +798,9 @@ class CheckRunner:
             result = not_decisive_where_calibrated(result, shape_args)
             shape_inputs[name] = shape_args
             shape[name] = self._second_look(name, result, shape_args) or result
+            if result.usable and result.first_look and result.outline_best_candidate is not None \
+                    and _px_apart(result.outline_best_candidate, result.shift_px) > OUTLINE_DISAGREES_PX:
+                state.first_look_outline = result.outline_best_candidate
             errors[name] = shape[name].error_pct if result.usable else None
             if result.usable:
                 state.last_observed, state.last_observed_z = result.observed_mask, z
@@ -872,14 +887,34 @@ class CheckRunner:
                           and all(growth is None or growth >= 50.0 for growth in (result.growth_pct, growth_before)))
         else:
             shape_fits = result.missing_pct < threshold / 3.0
+        # Extra material alone is also what an outline slid down onto a brim or shadow shows (the part's side
+        # above it): when the smallest move does not pass, the shift that puts the upper outlines together gets
+        # a look too. Missing material alone is also what a stalled top shows, and matching upper outlines would
+        # slide the outline down onto it: the smallest move only.
+        # Only where the camera's first look already disagreed with its outline (and still does, at the same
+        # place): material on top of the part (a stringing hair, a blob) also moves the outline match up onto
+        # it, but it was not there at the first look.
+        targets = [result.best_candidate]
+        first_outline = self.cameras[name].first_look_outline
+        if (not missing and result.outline_best_candidate not in (None, result.best_candidate)
+                and first_outline is not None
+                and _px_apart(result.outline_best_candidate, first_outline) <= OUTLINE_DISAGREES_PX):
+            targets.append(result.outline_best_candidate)
         if (not shape_fits or not result.usable or result.passed or result.decisive or result.best_candidate is None
-                or result.best_candidate == result.shift_px or self.cameras[name].shift_candidates is None
+                or self.cameras[name].shift_candidates is None
                 or (result.band_error_pct is not None and result.band_error_pct > self.settings.band_threshold_pct)
                 or not _still_in_place(result.observed_mask, shape_args.get("last_observed"))):
             return None
-        second = check_shape(**dict(shape_args, anchor=result.best_candidate, max_drift=0))
-        if second.usable and second.passed and second.error_pct <= threshold / 2.0:
-            return second
+        for target in targets:
+            if target == result.shift_px:
+                continue
+            second = check_shape(**dict(shape_args, anchor=target, max_drift=0))
+            if second.usable and second.passed and second.error_pct <= threshold / 2.0:
+                if target != result.best_candidate:
+                    # a layer shift or loose material also moves the upper outline: the outline's fit excuses
+                    # the shape figures only; the newest band's shift and the new material stay the first look's
+                    second = replace(second, band_shift=result.band_shift, new_outside=result.new_outside)
+                return second
         return None
 
     def _learn_calibration_offsets(self, z: float, shape: dict[str, ShapeResult], shape_inputs: dict[str, dict],

@@ -162,6 +162,8 @@ class ShapeResult:
     #: (see align_candidates), and the best of them; None when not asked for
     shift_candidates: np.ndarray | None = field(default=None, repr=False)
     best_candidate: tuple[int, int] | None = None
+    #: ... and the one of them that puts the expected upper outline on the observed one (outline_candidate)
+    outline_best_candidate: tuple[int, int] | None = None
     palette: np.ndarray | None = field(default=None, repr=False)         # (k, 3) the part's colours seen now
     #: of the missing material, what shows the background itself (% of expected; % of the newest band): the
     #: rest passes for the background pixel by pixel but not as a group, a face of nearly its colour
@@ -635,6 +637,24 @@ def align_candidates(
     return (int(dxs[iy, ix]), int(dys[iy, ix])), np.stack([dxs[fits], dys[fits]], axis=1)
 
 
+def outline_candidate(observed: np.ndarray, expected: np.ndarray,
+                      shifts: np.ndarray | None) -> tuple[int, int] | None:
+    """Of ``shifts`` ((k, 2) int (dx, dy) of ``expected`` onto ``observed``, both (h, w) bool: shifts the overlap
+    cannot tell apart), the one that puts the expected upper outline on the observed one (the smallest move
+    among equals); None when there are none.
+
+    Bed-level material attached to the part (brim, cast shadow) makes the overlap flat wherever the outline
+    fits inside it, and the smallest move of such a set slides the outline down onto the brim. The part's
+    upper outline is the one cue bed-level material never gives (:func:`align_expected` breaks its ties on it).
+    """
+    if shifts is None or not len(shifts):
+        return None
+    shifts = np.asarray(shifts, int).reshape(-1, 2)
+    cost = _profile_cost(observed, expected, shifts[:, 0], shifts[:, 1])
+    k = int(np.argmin(cost + 1e-3 * np.hypot(shifts[:, 0], shifts[:, 1])))
+    return int(shifts[k, 0]), int(shifts[k, 1])
+
+
 def upper_profile(mask: np.ndarray) -> np.ndarray:
     """(w,) float: row of the top-most True pixel of each column, NaN for empty columns."""
     has = mask.any(axis=0)
@@ -1055,6 +1075,7 @@ def check_shape(
     best_candidate, shift_candidates = (align_candidates(anchor_mask & prior, template, shift_bound,
                                                          candidates=candidates)
                                         if track_candidates else (None, None))
+    outline_best = outline_candidate(anchor_mask & prior, expected, shift_candidates) if track_candidates else None
     expected_a = shift_mask(expected, dx, dy)
     band_a = shift_mask(band, dx, dy)
     # weak cues (darkening, texture) vouch for the part where it is expected, never for extra material
@@ -1232,6 +1253,7 @@ def check_shape(
         threshold=float(threshold), band_threshold=float(band_threshold), passed=passed, usable=usable,
         reasons=reasons, changed_bed_fraction=changed, observed_mask=observed_full, palette=palette_now,
         decisive=decisive, shift_candidates=shift_candidates, best_candidate=best_candidate,
+        outline_best_candidate=outline_best,
         new_outside=new_outside, moved_px=moved_px, first_look=last_observed is None,
         background_missing_pct=background_missing_pct, background_band_missing_pct=background_band_missing_pct,
         band_part_coverage=band_coverage, coarse_growth_pct=coarse_growth_pct, foreign_mask=foreign_full,
