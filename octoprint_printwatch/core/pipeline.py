@@ -849,12 +849,12 @@ class CheckRunner:
                                   rise_before=rise_before, missing_before=missing_before)
         verdict, reasons = decide(**self.last_decision)
         for name, state in self.cameras.items():
-            state.last_extra = shape[name].extra_pct if name in shape and shape[name].usable else None
             r = shape.get(name)
-            state.last_rise = (None if r is None or not r.usable
-                               else r.growth_pct if r.growth_pct is not None else r.coarse_growth_pct)
-            state.last_missing = r.missing_pct if r is not None and r.usable else None
-            state.last_foreign = r.foreign_mask if r is not None and r.usable else None
+            if r is None or not r.usable:
+                state.last_extra = state.last_rise = state.last_missing = state.last_foreign = None
+                continue
+            state.last_extra, state.last_missing, state.last_foreign = r.extra_pct, r.missing_pct, r.foreign_mask
+            state.last_rise = r.growth_pct if r.growth_pct is not None else r.coarse_growth_pct
         self.previous_z = z
         return CheckResult(layer=int(layer), z=float(z), verdict=verdict, shape_error_pct=errors, shape=shape,
                            size=size, reasons=reasons, seconds=time.perf_counter() - started,

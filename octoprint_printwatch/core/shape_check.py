@@ -1133,13 +1133,18 @@ def check_shape(
     # Growth since the previous check: the same camera, the same processing, so calibration and
     # alignment errors cancel; a part that stopped growing (runout, clog, spaghetti) shows none of the
     # new band, even where the band is a thin crescent the absolute comparison cannot resolve.
+    # the previous check's material mask (None: no usable look before) and the model's silhouette then
+    seen_before = last_observed[crop] if last_observed is not None and last_observed.shape == (h, w) else None
+    previous_silhouette = (regions.previous_silhouette[crop].astype(bool)
+                           if regions.previous_silhouette is not None else None)
+    before_a = shift_mask(previous_silhouette, dx, dy) if previous_silhouette is not None else None
+    # the rise since then is read where this camera saw the previous check's height
+    rise_readable = measure_growth and seen_before is not None and previous_silhouette is not None
     growth_pct = coarse_growth_pct = None
-    if (measure_growth and last_observed is not None and last_observed.shape == (h, w)
-            and regions.previous_silhouette is not None):
-        before_a = shift_mask(regions.previous_silhouette[crop].astype(bool), dx, dy)
+    if rise_readable:
         # only material within the expected outlines counts: strings and the hotend above the part
         # must not make its top look higher than it is
-        growth_args = (observed & grown_a, last_observed[crop] & dilate(before_a, tol), expected_a, before_a)
+        growth_args = (observed & grown_a, seen_before & dilate(before_a, tol), expected_a, before_a)
         # (only where the top of the material is an edge of the frame: the part's, not one the background held)
         edges = edge_in_the_frame(observed & grown_a, frame[crop], evidence.background_norm, tol, bed_sample,
                                   material_factor)
@@ -1163,13 +1168,10 @@ def check_shape(
             band_coverage = part_coverage(frame[crop], evidence.background_norm, band_a & core, palette_used)
         if regions.px_per_mm > 0:
             reach = int(np.ceil(8.0 * regions.px_per_mm))
-            before_band = (shift_mask(regions.previous_silhouette[crop].astype(bool), dx, dy)
-                           if regions.previous_silhouette is not None else expected_a & ~band_a)
+            before_band = before_a if before_a is not None else expected_a & ~band_a
             marks = dont_care_a
-            if (measure_growth and last_observed is not None and last_observed.shape == (h, w)
-                    and regions.previous_silhouette is not None):
-                marks = dont_care_a & ~(_not_a_mark(observed, last_observed[crop], expected,
-                                                    regions.previous_silhouette[crop].astype(bool), tol)
+            if rise_readable:
+                marks = dont_care_a & ~(_not_a_mark(observed, seen_before, expected, previous_silhouette, tol)
                                         | bed_evidence)
             shifted_band = band_shift(observed, bed_evidence, before_band, band_a, reach, reach // 2,
                                       int(np.ceil(layer_shift_mm * regions.px_per_mm)), tol,
@@ -1188,8 +1190,8 @@ def check_shape(
     # Spaghetti (core/tangle.py): material seen now and not at the previous check, where the model has no
     # part, attached to it; pipeline.decide weighs it over the cameras
     new_outside = None
-    if last_observed is not None and last_observed.shape == (h, w):
-        new_outside = new_material(observed, last_observed[crop], expected_a, search_a, tol, regions.px_per_mm,
+    if seen_before is not None:
+        new_outside = new_material(observed, seen_before, expected_a, search_a, tol, regions.px_per_mm,
                                    ignore=reflection_a, marks=dont_care_a, linked=~evidence.bed,
                                    bed_to_image=regions.bed_to_image, not_the_prints=not_part_colour)
 
