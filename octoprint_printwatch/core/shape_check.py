@@ -665,19 +665,26 @@ def upper_profile(mask: np.ndarray) -> np.ndarray:
 
 def _profile_cost(observed: np.ndarray, expected: np.ndarray, dxs: np.ndarray, dys: np.ndarray,
                   cap: float = 6.0) -> np.ndarray:
-    """(n,) capped mean |observed top row - shifted expected top row| over the expected columns."""
+    """(n,) capped mean |observed top row - shifted expected top row| over the expected columns.
+
+    ``dxs``, ``dys``: (n,) int shifts of ``expected`` onto ``observed`` (both (h, w) bool). Columns a shift
+    moves out of the frame do not count; a shift that moves them all out costs ``cap``.
+    """
     obs = upper_profile(observed)
     exp = upper_profile(expected)
     cols = np.flatnonzero(~np.isnan(exp))
     w = observed.shape[1]
-    costs = np.empty(len(dxs), np.float32)
-    for i, (dx, dy) in enumerate(zip(dxs, dys)):
-        target = cols + int(dx)
-        ok = (target >= 0) & (target < w)
-        diff = np.abs(obs[target[ok]] - (exp[cols[ok]] + dy))
-        diff = np.where(np.isnan(diff), cap, np.minimum(diff, cap))
-        costs[i] = diff.mean() if diff.size else cap
-    return costs
+    dxs, dys = np.asarray(dxs, np.int64), np.asarray(dys, np.int64)
+    # (n, m): every shift against every expected column at once (hundreds of shifts per check)
+    target = cols[None, :] + dxs[:, None]
+    inside = (target >= 0) & (target < w)
+    seen = obs[np.clip(target, 0, w - 1)]
+    diff = np.abs(seen - (exp[cols][None, :] + dys[:, None].astype(np.float32)))
+    diff = np.where(np.isnan(diff), np.float32(cap), np.minimum(diff, np.float32(cap)))
+    counted = inside.sum(axis=1)
+    # rows are whole pixels, so the sums are exact and the means those of the per-shift loop this replaced
+    total = np.where(inside, diff, np.float32(0.0)).sum(axis=1, dtype=np.float64)
+    return np.where(counted > 0, total / np.maximum(counted, 1), cap).astype(np.float32)
 
 
 #: The coarse growth reading (ShapeResult.coarse_growth_pct) needs a median expected rise of this many ``min_rise``
