@@ -408,6 +408,19 @@ def unseen_by_partner(result: ShapeResult, usable: Mapping[str, ShapeResult], pa
 COARSE_ROSE_BEFORE_PCT = 50.0
 
 
+def missing_since_rise(kept: float | None, rise: float | None, missing: float,
+                       min_growth_pct: float) -> float | None:
+    """A view's ``CameraState.rise_missing`` after a check: its missing material (``missing``, %) when it read
+    the part rising there (``rise``: fine or else coarse growth, % of the expected rise, at least
+    :data:`COARSE_ROSE_BEFORE_PCT`); the value ``kept`` from an earlier such check while it reads a stall
+    (-15 % to ``min_growth_pct``: 0 +- a pixel step); None after any other reading or none."""
+    if rise is None:
+        return None
+    if rise >= COARSE_ROSE_BEFORE_PCT:
+        return missing
+    return kept if -15.0 <= rise < min_growth_pct else None
+
+
 def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings: DetectionSettings,
            unreadable: Mapping[str, str] | Sequence[str] = (), *,
            layer_shift: LayerShift | None = None, top_closing: bool = False,
@@ -415,7 +428,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
            extra_before: Mapping[str, float] | None = None,
            band_coverage_before: Mapping[str, float] | None = None,
            rise_before: Mapping[str, float | None] | None = None,
-           missing_before: Mapping[str, float] | None = None) -> tuple[str, list[str]]:
+           missing_before: Mapping[str, float] | None = None,
+           missing_at_rise: Mapping[str, float] | None = None) -> tuple[str, list[str]]:
     """The combined decision rule -> (verdict, reasons).
 
     * A camera counts only when it gave a frame and its background still matches the bed
@@ -447,7 +461,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       growth and no top surface closes, when the median of the coarse readings (``coarse_growth_pct``) of the
       views that read a rise of 50 % at their previous check (``rise_before``) is under ``min_growth_pct`` and a
       view reading under it misses half the threshold more of the part than at its previous check
-      (``missing_before``),
+      (``missing_before``); a view that read such a rise at an earlier check and no rise at every check since
+      (``missing_at_rise``: its missing material at that check) counts too, measured against that check,
       or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
       abstains reports no ``error_pct`` and never fails);
     * or when the cameras together confirm that the newest layers sit sideways on the older ones
@@ -513,14 +528,22 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     # face in the bed's colour, reads 0 at every check), and corroborated by material gone missing since that
     # check in a view reading no rise (``missing_before``: a face the colour of the bed misses the same at every
     # check). A stop is a change: the part rose, now it does not, and its newest layers are missing.
+    # A stop falls between two checks: at the first check after it the newest layers may be too thin to miss
+    # (a stop late in the interval), and at the next one the view's previous reading is the stop itself. So a
+    # view that read the part rising at an earlier check and no rise at every check since (``missing_at_rise``:
+    # its missing material at that check, CameraState.rise_missing) counts as well, its missing material
+    # measured against that check: the part rose, then stopped, and its newest layers went missing since.
     rise_before, missing_before = rise_before or {}, missing_before or {}
-    coarse = {cam: r.coarse_growth_pct for cam, r in usable.items()
-              if r.coarse_growth_pct is not None and r.coarse_growth_pct >= -15.0
-              and (rise_before.get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT}
+    missing_at_rise = missing_at_rise or {}
+    rose = {cam: (missing_at_rise[cam] if cam in missing_at_rise else missing_before.get(cam))
+            for cam in usable
+            if cam in missing_at_rise or (rise_before.get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT}
+    coarse = {cam: usable[cam].coarse_growth_pct for cam in rose
+              if usable[cam].coarse_growth_pct is not None and usable[cam].coarse_growth_pct >= -15.0}
     coarse_stalled = (not growth and not top_closing and bool(coarse)
                       and float(np.median(list(coarse.values()))) < settings.min_growth_pct
-                      and any(coarse[cam] < settings.min_growth_pct and cam in missing_before
-                              and usable[cam].missing_pct - missing_before[cam] >= usable[cam].threshold / 2.0
+                      and any(coarse[cam] < settings.min_growth_pct and rose[cam] is not None
+                              and usable[cam].missing_pct - rose[cam] >= usable[cam].threshold / 2.0
                               for cam in coarse))
     if coarse_stalled:
         growth = list(coarse.values())
@@ -692,6 +715,10 @@ class CameraState:
     #: there (None: not usable there): decide's coarse stall rule
     last_rise: float | None = None
     last_missing: float | None = None
+    #: its missing material at the last check it read the part rising (COARSE_ROSE_BEFORE_PCT), kept while
+    #: every later reading of it (fine or else coarse) is a stall (-15 % to ``min_growth_pct``); None
+    #: otherwise, and once it is not usable: decide's coarse stall rule (a stop between two checks)
+    rise_missing: float | None = None
     #: the highest share of its newest band covered by the part's material so far (core/nest.py)
     band_coverage: float | None = None
     #: (dx, dy) px: a calibration error larger than the stated one, learned once (_learn_calibration_offsets);
@@ -758,6 +785,8 @@ class CheckRunner:
         rise_before = {name: state.last_rise for name, state in self.cameras.items() if state.last_rise is not None}
         missing_before = {name: state.last_missing for name, state in self.cameras.items()
                           if state.last_missing is not None}
+        missing_at_rise = {name: state.rise_missing for name, state in self.cameras.items()
+                           if state.rise_missing is not None}
         for name, state in self.cameras.items():
             frame = frames.get(name)
             background = self.backgrounds.get(name)
@@ -846,15 +875,19 @@ class CheckRunner:
         self.last_decision = dict(shape=shape, size=size, settings=settings, unreadable=unreadable,
                                   layer_shift=layer_shift, top_closing=top_closing, pairs=self.plan.pairs,
                                   extra_before=extra_before, band_coverage_before=coverage_before,
-                                  rise_before=rise_before, missing_before=missing_before)
+                                  rise_before=rise_before, missing_before=missing_before,
+                                  missing_at_rise=missing_at_rise)
         verdict, reasons = decide(**self.last_decision)
         for name, state in self.cameras.items():
             r = shape.get(name)
             if r is None or not r.usable:
                 state.last_extra = state.last_rise = state.last_missing = state.last_foreign = None
+                state.rise_missing = None
                 continue
             state.last_extra, state.last_missing, state.last_foreign = r.extra_pct, r.missing_pct, r.foreign_mask
             state.last_rise = r.growth_pct if r.growth_pct is not None else r.coarse_growth_pct
+            state.rise_missing = missing_since_rise(state.rise_missing, state.last_rise, r.missing_pct,
+                                                    settings.min_growth_pct)
         self.previous_z = z
         return CheckResult(layer=int(layer), z=float(z), verdict=verdict, shape_error_pct=errors, shape=shape,
                            size=size, reasons=reasons, seconds=time.perf_counter() - started,

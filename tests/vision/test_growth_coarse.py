@@ -59,3 +59,37 @@ def test_coarse_readings_stand_in_only_where_no_camera_resolves_the_rise():
                   rise_before={"s0": 0.0}, missing_before=before)[0] == "ok"
     # nor at a closing top
     assert decide(stopped, {}, s, rise_before=rose, missing_before=before, top_closing=True)[0] == "ok"
+
+
+def test_a_stop_between_two_checks_is_read_against_the_last_check_that_rose():
+    """Cross-check seed 7 044_runout: the views read the part rising (100 %) at check 12, no rise at check 13
+    (the stop) with nothing missing yet (the newest layers too thin), and at check 14 no rise again with 3.9 %
+    of the part missing. At check 14 the previous reading is the stop itself (0 %), so the coarse rule of
+    HEAD, which needs a rise at the previous check, never looked again."""
+    from octoprint_printwatch.core.pipeline import missing_since_rise
+    s = DetectionSettings()
+    # the state a view keeps: its missing material at the check that rose, while it reads a stall since
+    kept = missing_since_rise(None, 100.0, 0.0, s.min_growth_pct)       # check 12: rose, 0 % missing
+    assert kept == 0.0
+    kept = missing_since_rise(kept, 0.0, 0.0, s.min_growth_pct)         # check 13: the stop
+    assert kept == 0.0
+    # any other reading (a rise of 15-50 %, an outline that sank, none at all) forgets it
+    assert missing_since_rise(0.0, 30.0, 1.0, s.min_growth_pct) is None
+    assert missing_since_rise(0.0, -40.0, 1.0, s.min_growth_pct) is None
+    assert missing_since_rise(0.0, None, 1.0, s.min_growth_pct) is None
+    # check 14: both views read no rise, 3.9 / 4.1 % missing; at check 13 they read 0 % (rise_before) and
+    # missed nothing (missing_before)
+    now = {"s0L": view("s0L", coarse=0.0, band_missing=10.8, missing=3.86),
+           "s0R": view("s0R", coarse=0.0, band_missing=12.8, missing=4.09)}
+    before = dict(rise_before={"s0L": 0.0, "s0R": 0.0}, missing_before={"s0L": 0.0, "s0R": 0.0})
+    assert decide(now, {}, s, **before)[0] == "ok"                    # HEAD: no view rose at its previous check
+    verdict, reasons = decide(now, {}, s, **before, missing_at_rise={"s0L": kept, "s0R": kept})
+    assert verdict == "fail" and any("not grown as expected" in r for r in reasons)
+    # a view that never read a rise (a face in the bed's colour reads 0 % at every check) still does not count
+    assert decide(now, {}, s, **before, missing_at_rise={})[0] == "ok"
+    # nor does material missing as much as when the part last rose (a face the camera cannot tell apart)
+    assert decide(now, {}, s, **before, missing_at_rise={"s0L": 3.0, "s0R": 3.5})[0] == "ok"
+    # nor where a fine reading exists, nor at a closing top
+    fine = dict(now, s1=view("s1", growth=95.0))
+    assert decide(fine, {}, s, **before, missing_at_rise={"s0L": 0.0, "s0R": 0.0})[0] == "ok"
+    assert decide(now, {}, s, **before, missing_at_rise={"s0L": 0.0, "s0R": 0.0}, top_closing=True)[0] == "ok"
