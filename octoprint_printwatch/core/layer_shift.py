@@ -270,16 +270,35 @@ def _vertical_null(evidence: _Evidence, before: np.ndarray, band: np.ndarray,
     window = (slice(max(0, y0 - reach_y - 1), min(band.shape[0], y1 + reach_y + 1)), slice(x0, x1))
     band_w, before_w, ring = band[window], before[window], evidence.ring[window]
     seen, empty = evidence.seen[window], evidence.empty[window]
+    free = ~before_w & ~ring
+    # (every dy at once, with the same counts as stretching the band dy by dy:) raising the top by n px
+    # gains the pixels outside the band whose nearest band pixel below, in their column, is at most n px
+    # down; lowering it by n loses the band's pixels that have no band pixel n px above them
+    rows = band_w.shape[0]
+    index = np.where(band_w, np.arange(rows)[:, None], rows + reach_y + 1)
+    below = np.minimum.accumulate(index[::-1], axis=0)[::-1]   # the first band row at or below each pixel
+    down = np.full(band_w.shape, reach_y + 1, np.int64)
+    down[:-1] = below[1:] - np.arange(rows - 1)[:, None]        # ... strictly below: how far down it is
+    gain = free & ~band_w & (down <= reach_y)
+    gained_seen = np.cumsum(np.bincount(down[gain & seen], minlength=reach_y + 1)[:reach_y + 1])
+    gained_empty = np.cumsum(np.bincount(down[gain & empty], minlength=reach_y + 1)[:reach_y + 1])
+    lose = free & band_w
+    lose_seen, lose_empty = lose & seen, lose & empty
+    all_seen, all_empty = np.count_nonzero(lose_seen), np.count_nonzero(lose_empty)
     best, best_dy = 0.0, 0
     scores = np.zeros(2 * reach_y + 1, np.float32)
     for dy in range(-reach_y, reach_y + 1):
         if dy == 0:
             continue
-        changed = (stretched(band_w, dy) ^ band_w) & ~before_w & ~ring
-        gained = changed & ~band_w
-        lost = changed & band_w
-        score = (np.count_nonzero(gained & seen) + np.count_nonzero(lost & empty)
-                 - 2.0 * (np.count_nonzero(gained & empty) + np.count_nonzero(lost & seen)))
+        if dy < 0:
+            g_seen, g_empty, l_seen, l_empty = int(gained_seen[-dy]), int(gained_empty[-dy]), 0, 0
+        else:
+            g_seen = g_empty = 0
+            # lost: band pixels whose pixel dy above is not band (rows above the window count as not band)
+            kept = band_w[:-dy] if dy < rows else band_w[:0]
+            l_seen = all_seen - np.count_nonzero(lose_seen[dy:] & kept)
+            l_empty = all_empty - np.count_nonzero(lose_empty[dy:] & kept)
+        score = (g_seen + l_empty - 2.0 * (g_empty + l_seen))
         scores[dy + reach_y] = score
         if score > best:
             best, best_dy = score, dy

@@ -58,14 +58,19 @@ def shadow_left(luma_f: np.ndarray, luma_b: np.ndarray, sample: np.ndarray, brig
     lit = max(float(np.percentile(luma_b.ravel()[sample], 75)), float(np.percentile(luma_f.ravel()[sample], 75)))
     # ... and brighter by at most the factor a shadow can take away (it keeps ``min_ratio`` of the light):
     # a lit part in front of a dark backdrop is brighter than that
-    candidate = where & (luma_f <= lit + factor * bright_noise) & (luma_f <= luma_b / min_ratio + factor * bright_noise)
+    # (tested on the pixels of ``where`` only, usually a small share of the crop)
+    index = np.flatnonzero(where)
+    f_at, b_at = luma_f.ravel()[index], luma_b.ravel()[index]
+    candidate = np.zeros(where.shape, bool)
+    candidate.ravel()[index] = (f_at <= lit + factor * bright_noise) & (f_at <= b_at / min_ratio + factor * bright_noise)
     # the rest reads at most _READS px around a candidate, so the box around them gives the same answer
     box = bounding_box(candidate, pad=_READS)
     if box is None:
         return out
     y0, y1, x0, x1 = box
     inner = (slice(y0, y1), slice(x0, x1))
-    passed = candidate[inner] & _shading_only(luma_f[inner], luma_b[inner], bright_noise, factor, prior[inner])
+    wanted = candidate[inner]
+    passed = wanted & _shading_only(luma_f[inner], luma_b[inner], bright_noise, factor, prior[inner], wanted)
     # (regions are grouped across gaps of a few pixels: grain and noise break a shadow's area up)
     grouped = cv2.dilate(passed.astype(np.uint8), np.ones((7, 7), np.uint8))
     count, labels = cv2.connectedComponents(grouped, connectivity=8)
@@ -80,8 +85,10 @@ def shadow_left(luma_f: np.ndarray, luma_b: np.ndarray, sample: np.ndarray, brig
 
 
 def _shading_only(luma_f: np.ndarray, luma_b: np.ndarray, bright_noise: float, factor: float,
-                  prior: np.ndarray) -> np.ndarray:
-    """(h, w) bool: where a brightening keeps the bed's pattern and is no thin line, see :func:`shadow_left`."""
+                  prior: np.ndarray, wanted: np.ndarray | None = None) -> np.ndarray:
+    """(h, w) bool: where a brightening keeps the bed's pattern and is no thin line, see :func:`shadow_left`.
+    ``wanted`` ((h, w) bool or None: everywhere): the pixels whose answer is read; elsewhere a textured
+    pixel's correlation may be left unmeasured (then it reads as not the same grain)."""
     # the bed's grain, without edges: a 5x5 median keeps a shadow's edge (in the background, not in the
     # frame, once the shadow left) and removes the grain, so the residual holds the grain alone
     smooth_b = cv2.medianBlur(luma_b, 5)
@@ -99,7 +106,7 @@ def _shading_only(luma_f: np.ndarray, luma_b: np.ndarray, bright_noise: float, f
     edge_b = (np.abs(gx) + np.abs(gy)) * 0.25 > factor * bright_noise + 2.0 * np.sqrt(var_b)
     textured &= ~cv2.dilate(edge_b.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
     correlation = np.full(luma_f.shape, -1.0, np.float32)
-    asked = bounding_box(textured, pad=_CORRELATION_REACH)
+    asked = bounding_box(textured if wanted is None else textured & wanted, pad=_CORRELATION_REACH)
     if asked is not None:
         # the best of the nine 1-px shifts: a shaken camera moves the grain, the light does not change it
         # (only around the pixels that ask: a pixel's correlation reads _CORRELATION_REACH px around it, so
@@ -132,7 +139,8 @@ def shade_of_clipped_bed(frame: np.ndarray, background: np.ndarray, clipped: np.
     clipped (``clipped`` (h, w, 3) bool) its true value is unknown (at least what was stored), so the
     chromaticity seems to change. Here the factor is fitted on the unclipped channels, which must follow it
     within ``tolerance`` grey levels, and a clipped channel must be at least the factor times its stored
-    value. ``frame``, ``background`` (h, w, 3) float32, the background at the frame's exposure."""
+    value. ``frame`` (h, w, 3) float32 or uint8, ``background`` (h, w, 3) float32, the background at the frame's
+    exposure."""
     out = np.zeros(where.shape, bool)
     # (per pixel of ``where`` only: reducing the whole (h, w, 3) mask costs more than the rest)
     index = np.flatnonzero(where)
@@ -141,7 +149,7 @@ def shade_of_clipped_bed(frame: np.ndarray, background: np.ndarray, clipped: np.
     if not partly.any():
         return out
     index, c = index[partly], c[partly]
-    f, b = frame.reshape(-1, 3)[index], background.reshape(-1, 3)[index]
+    f, b = frame.reshape(-1, 3)[index].astype(np.float32, copy=False), background.reshape(-1, 3)[index]
     free = ~c
     k = (f * b * free).sum(axis=1) / np.maximum((b * b * free).sum(axis=1), 1.0)
     predicted = k[:, None] * b

@@ -223,6 +223,19 @@ def _luma_chroma(image: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     the noise of dark pixels from being amplified), scaled to roughly grey-level units.
     """
     b, g, r = image[..., 0], image[..., 1], image[..., 2]
+    if image.dtype == np.uint8:
+        # (the same float32 operations on the channels cast to float32 as they are read: no float copy of
+        # the whole image)
+        luma = np.add(b, g, dtype=np.float32)
+        np.add(luma, r, out=luma, dtype=np.float32)
+        luma *= 1.0 / 3.0
+        denom = luma + 6.0
+        c1 = np.subtract(r, g, dtype=np.float32)
+        c1 *= 100.0 / denom
+        c2 = np.add(r, g, dtype=np.float32)
+        c2 -= np.multiply(b, 2.0, dtype=np.float32)
+        c2 *= 50.0 / denom
+        return luma, c1, c2
     luma = (b + g + r) * (1.0 / 3.0)
     denom = luma + 6.0
     c1 = (r - g) * (100.0 / denom)
@@ -232,7 +245,9 @@ def _luma_chroma(image: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]
 
 def _outside_range(value: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
     """How far ``value`` lies outside [low, high], per pixel (0 inside)."""
-    return np.maximum(np.maximum(low - value, value - high), 0.0)
+    out = low - value
+    np.maximum(out, value - high, out=out)
+    return np.maximum(out, 0.0, out=out)
 
 
 def _noise_scale(score: np.ndarray, sample: np.ndarray, floor: float) -> float:
@@ -271,8 +286,6 @@ def material_evidence(
         part in the bed's colour looks like the bed brightened, so there only the bed's own grain tells a
         shadow that left (core/shadows.py); None: the whole prior.
     """
-    bg = background.astype(np.float32)
-    fr = frame.astype(np.float32)
     sample_mask = bed_sample if int(bed_sample.sum()) >= 50 else ~prior
     sample = np.flatnonzero(sample_mask)
     if sample.size > 6000:  # statistics need a few thousand pixels, not all of them
@@ -280,12 +293,16 @@ def material_evidence(
     # exposure / white balance: per-channel gain, median ratio on certain-bed pixels
     gains = np.ones(3, np.float32)
     if sample.size:
-        bg_s, fr_s = bg.reshape(-1, 3)[sample], fr.reshape(-1, 3)[sample]
-        ok = bg_s.min(axis=1) > 8.0
+        # (the sampled pixels only: a float copy of the whole frame is not needed, and the background's is
+        # made once, already scaled)
+        rows, cols = np.divmod(sample, background.shape[1])
+        bg_s, fr_s = background[rows, cols].astype(np.float32), frame[rows, cols].astype(np.float32)
+        ok = np.minimum(np.minimum(bg_s[:, 0], bg_s[:, 1]), bg_s[:, 2]) > 8.0
         if ok.sum() >= 50:
             gains = np.median(fr_s[ok] / bg_s[ok], axis=0).astype(np.float32)
             gains = np.clip(gains, 0.2, 5.0)
-    bg *= gains
+    bg = np.multiply(background, gains, dtype=np.float32)
+    fr = np.ascontiguousarray(frame)
 
     luma_f, c1_f, c2_f = _luma_chroma(fr)
     luma_b, c1_b, c2_b = _luma_chroma(bg)
@@ -293,13 +310,18 @@ def material_evidence(
     lo_l, hi_l = cv2.erode(luma_b, _KERNEL3), cv2.dilate(luma_b, _KERNEL3)
     # the chromaticity change, brought back to grey levels at the frame's brightness so its noise
     # does not grow in dark pixels (where JPEG's coarse chroma would otherwise look like a colour change)
-    chroma = np.hypot(_outside_range(c1_f, cv2.erode(c1_b, _KERNEL3), cv2.dilate(c1_b, _KERNEL3)),
-                      _outside_range(c2_f, cv2.erode(c2_b, _KERNEL3), cv2.dilate(c2_b, _KERNEL3)))
+    chroma = _hypot(_outside_range(c1_f, cv2.erode(c1_b, _KERNEL3), cv2.dilate(c1_b, _KERNEL3)),
+                    _outside_range(c2_f, cv2.erode(c2_b, _KERNEL3), cv2.dilate(c2_b, _KERNEL3)))
     chroma *= (luma_f + 6.0) * 0.01
-    bright = np.maximum(luma_f - hi_l, 0.0)
-    dark = np.maximum(lo_l - luma_f, 0.0)
+    bright = luma_f - hi_l
+    np.maximum(bright, 0.0, out=bright)
+    dark = lo_l - luma_f
+    np.maximum(dark, 0.0, out=dark)
     grad_f = _gradient(luma_f)
-    texture = np.maximum(grad_f - cv2.dilate(_gradient(luma_b), _KERNEL3) * 1.5, 0.0)
+    texture = cv2.dilate(_gradient(luma_b), _KERNEL3)
+    texture *= 1.5
+    np.subtract(grad_f, texture, out=texture)
+    np.maximum(texture, 0.0, out=texture)
 
     cues = {"chroma": chroma, "bright": bright, "dark": dark, "texture": texture}
     noise = {name: _noise_scale(cue, sample, _NOISE_FLOOR[name]) for name, cue in cues.items()}
@@ -345,17 +367,31 @@ def material_evidence(
     score = np.maximum(strong, weak)
     bed = score < bed_factor
     # absolute (not noise-relative) test: when the whole scene changed, the noise levels change with it
-    changed_px = (chroma > 0.6 * _CHANGED_LEVELS) | (bright > _CHANGED_LEVELS) | (dark > _CHANGED_LEVELS)
-    changed = float(np.mean(changed_px.ravel()[sample])) if sample.size else 0.0
+    # (read on the sampled pixels only)
+    changed_px = ((chroma.ravel()[sample] > 0.6 * _CHANGED_LEVELS) | (bright.ravel()[sample] > _CHANGED_LEVELS)
+                  | (dark.ravel()[sample] > _CHANGED_LEVELS))
+    changed = float(np.mean(changed_px)) if sample.size else 0.0
     return Evidence(material=material, strong=strong_material, bed=bed, score=score, noise=noise, gains=gains,
                     background_norm=bg,
                     changed_bed_fraction=changed)
 
 
 def _gradient(luma: np.ndarray) -> np.ndarray:
-    gx = cv2.Sobel(luma, cv2.CV_32F, 1, 0, ksize=3)
-    gy = cv2.Sobel(luma, cv2.CV_32F, 0, 1, ksize=3)
-    return cv2.blur(np.abs(gx) + np.abs(gy), (3, 3)) * 0.25
+    gx = np.abs(cv2.Sobel(luma, cv2.CV_32F, 1, 0, ksize=3))
+    gx += np.abs(cv2.Sobel(luma, cv2.CV_32F, 0, 1, ksize=3))
+    out = cv2.blur(gx, (3, 3))
+    out *= 0.25
+    return out
+
+
+def _hypot(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """np.hypot of two non-negative (h, w) float32 arrays, computed only where both are non-zero (where
+    one is zero it is exactly the other: the chromaticity change is zero on most pixels)."""
+    out = np.maximum(x, y)
+    both = np.flatnonzero((x > 0.0) & (y > 0.0))
+    if both.size:
+        out.ravel()[both] = np.hypot(x.ravel()[both], y.ravel()[both])
+    return out
 
 
 def part_palette(frame: np.ndarray, mask: np.ndarray, groups: int = 5) -> np.ndarray | None:
@@ -759,10 +795,14 @@ def edge_in_the_frame(observed: np.ndarray, frame: np.ndarray, background: np.nd
     cols, above, below = cols[ok], above[ok], below[ok]
     if cols.size == 0:
         return columns
-    fr, bg = frame.astype(np.float32), background.astype(np.float32)
+    # (float32 copies of the pixels read only, not of the whole images)
+    def at(image: np.ndarray, ys: np.ndarray, xs: np.ndarray) -> np.ndarray:
+        return image[ys, xs].astype(np.float32)
+
     c = cols[:, None]
-    frame_step = np.linalg.norm(fr[above, c].mean(axis=1) - fr[below, c].mean(axis=1), axis=1)
-    background_step = np.linalg.norm(bg[above, c].mean(axis=1) - bg[below, c].mean(axis=1), axis=1)
+    frame_step = np.linalg.norm(at(frame, above, c).mean(axis=1) - at(frame, below, c).mean(axis=1), axis=1)
+    background_step = np.linalg.norm(at(background, above, c).mean(axis=1) - at(background, below, c).mean(axis=1),
+                                     axis=1)
     # a change of the frame clear of the noise is an edge whatever the background did: the part differs from
     # what lies above its top, and would be seen there had it risen (a difference of two means of n rows has
     # 1/sqrt(n) of the per-pixel spread of frame - background, norm over the three channels)
@@ -770,7 +810,8 @@ def edge_in_the_frame(observed: np.ndarray, frame: np.ndarray, background: np.nd
     if bed_sample is not None and int(bed_sample.sum()) >= 50:
         sample = np.flatnonzero(bed_sample)
         sample = sample[:: sample.size // 6000 + 1]
-        diff = fr.reshape(-1, 3)[sample] - bg.reshape(-1, 3)[sample]
+        rows_s, cols_s = np.divmod(sample, w)
+        diff = at(frame, rows_s, cols_s) - at(background, rows_s, cols_s)
         spread = 1.4826 * np.median(np.abs(diff - np.median(diff, axis=0)), axis=0)
         least_step = material_factor * float(np.linalg.norm(spread)) / np.sqrt(len(offsets))
     columns[cols] = (frame_step >= EDGE_OF_THE_FRAME_SHARE * background_step) | (frame_step >= least_step)

@@ -115,13 +115,15 @@ def new_material(
     tol = float(tolerance)
     direction = None if bed_to_image is None else float(np.arctan2(bed_to_image[0, 1], bed_to_image[0, 0]))
     none = NewMaterial(0.0, 0, 0, np.zeros(observed.shape, bool), direction=direction)
-    distance = cv2.distanceTransform((~expected).astype(np.uint8), cv2.DIST_L2, 3)
     # upwards the tolerance is doubled: the part's top may stand a layer higher than the model says
     grown = outline_zone(expected, tol, tol)
     outside = observed & ~grown
     new = outside & search & ~dilate(previous, 2)
     if ignore is not None:
         new &= ~ignore
+    if not new.any():   # (nothing new at all: the distances below are not needed)
+        return none
+    distance = cv2.distanceTransform((~expected).astype(np.uint8), cv2.DIST_L2, 3)
     far = distance > min_distance_mm * px_per_mm
     if not (new & far).any():   # most checks of a normal print end here
         return none
