@@ -217,29 +217,23 @@ class ShapeResult:
 
 # ------------------------------------------------------------------- helpers
 def _luma_chroma(image: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(h, w, 3) float32 BGR -> luma (h, w) and two shading-invariant chromaticity channels (h, w).
+    """(h, w, 3) float32 or uint8 BGR -> luma (h, w) and two shading-invariant chromaticity channels (h, w),
+    all float32.
 
     Chromaticity is an opponent colour divided by brightness (plus a constant that keeps
     the noise of dark pixels from being amplified), scaled to roughly grey-level units.
     """
     b, g, r = image[..., 0], image[..., 1], image[..., 2]
-    if image.dtype == np.uint8:
-        # (the same float32 operations on the channels cast to float32 as they are read: no float copy of
-        # the whole image)
-        luma = np.add(b, g, dtype=np.float32)
-        np.add(luma, r, out=luma, dtype=np.float32)
-        luma *= 1.0 / 3.0
-        denom = luma + 6.0
-        c1 = np.subtract(r, g, dtype=np.float32)
-        c1 *= 100.0 / denom
-        c2 = np.add(r, g, dtype=np.float32)
-        c2 -= np.multiply(b, 2.0, dtype=np.float32)
-        c2 *= 50.0 / denom
-        return luma, c1, c2
-    luma = (b + g + r) * (1.0 / 3.0)
+    # float32 operations on the channels as they are read: a uint8 frame needs no float copy of the whole image
+    luma = np.add(b, g, dtype=np.float32)
+    np.add(luma, r, out=luma, dtype=np.float32)
+    luma *= 1.0 / 3.0
     denom = luma + 6.0
-    c1 = (r - g) * (100.0 / denom)
-    c2 = (r + g - 2.0 * b) * (50.0 / denom)
+    c1 = np.subtract(r, g, dtype=np.float32)
+    c1 *= 100.0 / denom
+    c2 = np.add(r, g, dtype=np.float32)
+    c2 -= np.multiply(b, 2.0, dtype=np.float32)
+    c2 *= 50.0 / denom
     return luma, c1, c2
 
 

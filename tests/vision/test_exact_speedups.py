@@ -60,12 +60,22 @@ def test_hypot_is_numpys_hypot():
     assert np.array_equal(_hypot(zero, zero), zero)
 
 
-def test_luma_chroma_of_uint8_is_that_of_its_float_copy():
+def _luma_chroma_plain(image):
+    """The whole-image float32 form the channel-wise one replaced."""
+    b, g, r = (image[..., k].astype(np.float32) for k in range(3))
+    luma = (b + g + r) * (1.0 / 3.0)
+    denom = luma + 6.0
+    return luma, (r - g) * (100.0 / denom), (r + g - 2.0 * b) * (50.0 / denom)
+
+
+def test_luma_chroma_of_uint8_and_float32_is_the_plain_float_form():
     rng = np.random.default_rng(5)
     image = rng.integers(0, 256, (70, 50, 3), dtype=np.uint8)
     view = np.zeros((90, 80, 3), np.uint8)
     view[10:80, 20:70] = image
-    for source in (image, view[10:80, 20:70]):   # contiguous, and a crop's strided view
-        for fast, plain in zip(_luma_chroma(source), _luma_chroma(source.astype(np.float32))):
+    scaled = image.astype(np.float32) * np.float32(1.37)   # a background at the frame's exposure
+    # contiguous, a crop's strided view, and a float32 image
+    for source in (image, view[10:80, 20:70], scaled):
+        for fast, plain in zip(_luma_chroma(source), _luma_chroma_plain(source)):
             assert fast.dtype == plain.dtype == np.float32
             assert np.array_equal(fast, plain)
