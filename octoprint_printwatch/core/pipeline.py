@@ -408,17 +408,33 @@ def unseen_by_partner(result: ShapeResult, usable: Mapping[str, ShapeResult], pa
 COARSE_ROSE_BEFORE_PCT = 50.0
 
 
+#: A view keeps its missing material from its last rising check (missing_since_rise) for at most this many
+#: checks since at which nothing went missing (under a quarter of its threshold more than at the rise): a stop
+#: late in an interval may show nothing at the first check after it, never at the second (a whole interval's
+#: layers are then gone); a view that reads "no rise" while nothing goes missing cannot see the part rise.
+RISE_QUIET_CHECKS = 2
+
+
 def missing_since_rise(kept: float | None, rise: float | None, missing: float,
-                       min_growth_pct: float) -> float | None:
-    """A view's ``CameraState.rise_missing`` after a check: its missing material (``missing``, %) when it read
-    the part rising there (``rise``: fine or else coarse growth, % of the expected rise, at least
-    :data:`COARSE_ROSE_BEFORE_PCT`); the value ``kept`` from an earlier such check while it reads a stall
-    (-15 % to ``min_growth_pct``: 0 +- a pixel step); None after any other reading or none."""
-    if rise is None:
-        return None
-    if rise >= COARSE_ROSE_BEFORE_PCT:
-        return missing
-    return kept if -15.0 <= rise < min_growth_pct else None
+                       min_growth_pct: float, quiet: int = 0,
+                       threshold: float | None = None) -> tuple[float | None, int]:
+    """A view's ``CameraState.rise_missing`` and ``rise_quiet`` after a check: its missing material
+    (``missing``, %) when it read the part rising there (``rise``: fine or else coarse growth, % of the expected
+    rise, at least :data:`COARSE_ROSE_BEFORE_PCT`); the value ``kept`` from an earlier such check while it
+    reads a stall (-15 % to ``min_growth_pct``: 0 +- a pixel step) or no reading at all (the model's outline
+    does not rise in this view there, e.g. a tier printed inside the silhouette of the one below: no evidence
+    either way), counting the checks since (``quiet``) at which it misses under a quarter of ``threshold``
+    more than ``kept`` (None: none counted), and forgotten at the :data:`RISE_QUIET_CHECKS`-th; None after any
+    other reading."""
+    if rise is not None and rise >= COARSE_ROSE_BEFORE_PCT:
+        return missing, 0
+    if kept is None or (rise is not None and not -15.0 <= rise < min_growth_pct):
+        return None, 0
+    if threshold is not None and missing - kept < threshold / 4.0:
+        quiet += 1
+        if quiet >= RISE_QUIET_CHECKS:
+            return None, 0
+    return kept, quiet
 
 
 def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings: DetectionSettings,
@@ -452,8 +468,9 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       cameras of the observed rise of the part's upper outline since the previous check (readings below
       -15 %, a sunk outline, left out) is below ``min_growth_pct`` of the expected rise; or, unless a
       top surface closes, when two or more cameras measured growth, its median is under 50 % and two views
-      that saw under 50 % each miss 15 % of the newest band (strands piling on a stopped part lift the
-      outline a little but fill no band); or, unless a top surface closes, when the median is under
+      that saw under 50 % each miss 15 % of the newest band or half the threshold overall (strands piling on
+      a stopped part lift the outline a little but fill no band; a part that stopped before the previous check
+      misses more below its band); or, unless a top surface closes, when the median is under
       ``min_growth_pct`` and a view that saw no rise (or could not measure one) shows its newest band less
       than half covered by the part's colours where its band read solid (80 %) at an earlier check
       (``ShapeResult.band_part_coverage``; ``band_coverage_before``: each camera's highest reading at its
@@ -461,8 +478,9 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       growth and no top surface closes, when the median of the coarse readings (``coarse_growth_pct``) of the
       views that read a rise of 50 % at their previous check (``rise_before``) is under ``min_growth_pct`` and a
       view reading under it misses half the threshold more of the part than at its previous check
-      (``missing_before``); a view that read such a rise at an earlier check and no rise at every check since
-      (``missing_at_rise``: its missing material at that check) counts too, measured against that check,
+      (``missing_before``); a view that read such a rise at an earlier check and no rise (or no reading) at
+      every check since (``missing_at_rise``: its missing material at that check; :func:`missing_since_rise`)
+      counts too, measured against that check,
       or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
       abstains reports no ``error_pct`` and never fails);
     * or when the cameras together confirm that the newest layers sit sideways on the older ones
@@ -472,8 +490,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       since then, where the model has none, attached to the part and over 2 mm beyond its outline
       (``ShapeResult.new_outside``), at least 6 mm^2 in two usable views, or 30 mm^2 when only one camera
       is usable, or 6 mm^2 counting blobs in the bed-marks zone in cameras on two different sides, or
-      in one view while the part's outline rose under half the expected height (median of two or more views;
-      not where a top surface closes) (:func:`core.tangle.loose_material`);
+      in one view while the part's outline rose under half the expected height (median of two or more views,
+      or the only usable camera's own reading; not where a top surface closes) (:func:`core.tangle.loose_material`);
     * unknown when no camera and no pair gave usable evidence; ok otherwise.
     """
     if layer_shift is None:
@@ -506,8 +524,11 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     # A part rising at under half the expected rate while two views that see it slow each miss part of its
     # newest band has slowed, not been misread: strands piling on a stopped part lift the outline a little
     # but fill no band; a face the colour of the bed reads missing but its outline rises fully.
+    # (a view misses part of the newest band, or, where the part stopped before the previous check and the
+    # gap reaches below the band, half the threshold of the whole part, as for band_gone above)
     slowed_views = [r for r in measured.values()
-                    if r.growth_pct < 50.0 and (r.band_missing_pct or 0.0) >= 15.0]
+                    if r.growth_pct < 50.0 and ((r.band_missing_pct or 0.0) >= 15.0
+                                                or r.missing_pct >= r.threshold / 2.0)]
     stalled = stalled or (not top_closing and len(growth) >= 2 and float(np.median(growth)) < 50.0
                           and len(slowed_views) >= 2)
     # A part that stopped under a nest of strands (spaghetti) reads no missing material: the pile fills its
@@ -530,9 +551,10 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     # check). A stop is a change: the part rose, now it does not, and its newest layers are missing.
     # A stop falls between two checks: at the first check after it the newest layers may be too thin to miss
     # (a stop late in the interval), and at the next one the view's previous reading is the stop itself. So a
-    # view that read the part rising at an earlier check and no rise at every check since (``missing_at_rise``:
-    # its missing material at that check, CameraState.rise_missing) counts as well, its missing material
-    # measured against that check: the part rose, then stopped, and its newest layers went missing since.
+    # view that read the part rising at an earlier check and no rise (or no reading: the model's outline did
+    # not rise in it) at every check since (``missing_at_rise``: its missing material at that check,
+    # CameraState.rise_missing, missing_since_rise) counts as well, its missing material measured against that
+    # check: the part rose, then stopped, and its newest layers went missing since.
     rise_before, missing_before = rise_before or {}, missing_before or {}
     missing_at_rise = missing_at_rise or {}
     rose = {cam: (missing_at_rise[cam] if cam in missing_at_rise else missing_before.get(cam))
@@ -622,7 +644,9 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
                                         if r.new_outside is not None},
                             # (not where a top surface closes: a ridge's or apex's last layers are too thin
                             # for the outline to show them rise, so a normal part reads 0 % there)
-                            rise_pct=float(np.median(growth)) if len(growth) >= 2 and not top_closing else None)
+                            # (on a one-camera rig its own reading: there is no other view to ask)
+                            rise_pct=(float(np.median(growth)) if (len(growth) >= 2 or (growth and len(usable) == 1))
+                                      and not top_closing else None))
     if tangle is not None:
         fail_reasons.append(tangle)
         shape_fail = True
@@ -716,9 +740,12 @@ class CameraState:
     last_rise: float | None = None
     last_missing: float | None = None
     #: its missing material at the last check it read the part rising (COARSE_ROSE_BEFORE_PCT), kept while
-    #: every later reading of it (fine or else coarse) is a stall (-15 % to ``min_growth_pct``); None
-    #: otherwise, and once it is not usable: decide's coarse stall rule (a stop between two checks)
+    #: every later reading of it (fine or else coarse) is a stall (-15 % to ``min_growth_pct``) or none, until
+    #: the RISE_QUIET_CHECKS-th of those checks at which nothing more went missing; None otherwise, and once
+    #: it is not usable: decide's coarse stall rule (a stop between two checks; missing_since_rise)
     rise_missing: float | None = None
+    #: the checks since that rise at which it missed nothing more (missing_since_rise)
+    rise_quiet: int = 0
     #: the highest share of its newest band covered by the part's material so far (core/nest.py)
     band_coverage: float | None = None
     #: (dx, dy) px: a calibration error larger than the stated one, learned once (_learn_calibration_offsets);
@@ -739,6 +766,14 @@ class CameraState:
 
 #: A first look's chosen shift and its upper-outline match disagree beyond this many pixels (either axis)
 OUTLINE_DISAGREES_PX = 2
+
+
+def _among(shift: tuple[int, int], candidates: np.ndarray | None) -> bool:
+    """Whether ``shift`` (dx, dy) is one of ``candidates`` ((k, 2) int, or None: no)."""
+    if candidates is None or not len(candidates):
+        return False
+    c = np.asarray(candidates)
+    return bool(((c[:, 0] == shift[0]) & (c[:, 1] == shift[1])).any())
 
 
 def _px_apart(a: tuple[int, int], b: tuple[int, int]) -> int:
@@ -882,12 +917,13 @@ class CheckRunner:
             r = shape.get(name)
             if r is None or not r.usable:
                 state.last_extra = state.last_rise = state.last_missing = state.last_foreign = None
-                state.rise_missing = None
+                state.rise_missing, state.rise_quiet = None, 0
                 continue
             state.last_extra, state.last_missing, state.last_foreign = r.extra_pct, r.missing_pct, r.foreign_mask
             state.last_rise = r.growth_pct if r.growth_pct is not None else r.coarse_growth_pct
-            state.rise_missing = missing_since_rise(state.rise_missing, state.last_rise, r.missing_pct,
-                                                    settings.min_growth_pct)
+            state.rise_missing, state.rise_quiet = missing_since_rise(
+                state.rise_missing, state.last_rise, r.missing_pct, settings.min_growth_pct,
+                quiet=state.rise_quiet, threshold=r.threshold)
         self.previous_z = z
         return CheckResult(layer=int(layer), z=float(z), verdict=verdict, shape_error_pct=errors, shape=shape,
                            size=size, reasons=reasons, seconds=time.perf_counter() - started,
@@ -907,7 +943,9 @@ class CheckRunner:
         (``missing`` False), or missing material alone (``missing`` True: the caller asks only when no other
         camera fails, since a detached or stopped part is missed by several views) in a view that did not
         see the part slow (growth under 50 %) at this check nor at its previous one (``growth_before``: a
-        runout or a part knocked away stops the rise, and with one usable camera nothing else can tell);
+        runout or a part knocked away stops the rise, and with one usable camera nothing else can tell) and
+        whose own shift is not among those this check cannot tell apart (``shift_candidates``: there the part
+        fits as well as anywhere, and the best of them would only slide the outline down onto a stalled top);
         not decisive, no newest-band failure, the material seen at the previous check
         (``shape_args["last_observed"]``) still seen (a part that slid or was knocked off is not in place),
         the shift among those no passing check could tell apart, and the check passing
@@ -916,8 +954,13 @@ class CheckRunner:
         """
         threshold = self.settings.threshold_for(name)
         if missing:
+            # (and only where the overlap itself says the outline is misplaced: when this check's own shift is
+            # among those it cannot tell apart, the part fits there as well as anywhere, and what is missing
+            # there is material that is not there; the best of those shifts would slide the outline down onto
+            # a stalled top, a runout seen by one view that cannot read the rise)
             shape_fits = (result.extra_pct < threshold / 3.0 <= result.missing_pct
-                          and all(growth is None or growth >= 50.0 for growth in (result.growth_pct, growth_before)))
+                          and all(growth is None or growth >= 50.0 for growth in (result.growth_pct, growth_before))
+                          and not _among(result.shift_px, result.shift_candidates))
         else:
             shape_fits = result.missing_pct < threshold / 3.0
         # Extra material alone is also what an outline slid down onto a brim or shadow shows (the part's side

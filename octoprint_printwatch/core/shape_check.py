@@ -623,6 +623,10 @@ def _overlap_map(padded: np.ndarray, template: np.ndarray, s: int) -> np.ndarray
 #: Shifts within this share of the template's area of the best overlap are ones the image cannot tell apart.
 PLATEAU_SHARE = 0.02
 
+#: check_shape aligns on the strong cues alone only where they cover this share of the expected silhouette and,
+#: once the camera has an anchor, of the template it fits there (the older part)
+STRONG_TEMPLATE_SHARE = 0.3
+
 
 def align_candidates(
     observed: np.ndarray,
@@ -1107,9 +1111,18 @@ def check_shape(
     # align on the cues shadows cannot fake when they show most of the part, else on everything;
     # and on the part as it was at the previous check (where failures do not begin), so a runout or a
     # shifted top cannot pull the alignment
-    anchor_mask = observed_strong if observed_strong.sum() >= 0.3 * expected.sum() else observed
     older = expected & ~band
     template = older if older.sum() >= 0.3 * expected.sum() else expected
+    strong_shows_part = observed_strong.sum() >= STRONG_TEMPLATE_SHARE * expected.sum()
+    if strong_shows_part and template is older and anchor is not None:
+        # ... and most of the part the alignment fits, the older part, where earlier checks placed it (the
+        # anchor): a part's sides in the bed's colour give weak cues only, and its lit top face (strong) lies in
+        # the newest band, outside that template: fitted on the top face alone the older part climbs onto it, the
+        # band's height above the part (and the empty bed above it reads "missing"). (Not at a first look: where
+        # the part stands is what that look finds.)
+        strong_shows_part = (np.count_nonzero(observed_strong & shift_mask(older, anchor[0], anchor[1]))
+                             >= STRONG_TEMPLATE_SHARE * np.count_nonzero(older))
+    anchor_mask = observed_strong if strong_shows_part else observed
     dx, dy = align_expected(anchor_mask & prior, template, shift_bound, anchor=anchor, max_drift=max_drift,
                             profile_of=expected if anchor is None else None)
     # the shifts this check cannot tell apart, within those earlier checks could not (the per-print

@@ -201,12 +201,13 @@ def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = 
     and a stereo pair's two cameras see the same artefact from one place.
 
     ``rise_pct``: the median rise of the part's outline since the previous check (% of the model's) when two or
-    more views measured it, else None. Under ``SLOWED_RISE_PCT`` the part has slowed, and then one view seeing
-    ``two_views_mm2`` (the zone's blobs included) suffices on a rig of two or more usable cameras: a tangle
-    stops the part while its strands drape beyond the outline, and what one view may read as new material on a
-    normal print (a shadow edge at the rim, the part's own side beyond a misplaced outline, a flickering skirt
-    line) comes with a part that keeps rising. Other views of a tangle often see no strands beyond the outline
-    (they hang inside it, or over what was seen before): the growth test is the second witness.
+    more views measured it (on a one-camera rig, that camera's own reading), else None. Under
+    ``SLOWED_RISE_PCT`` the part has slowed, and then one view seeing ``two_views_mm2`` (the zone's blobs
+    included) suffices: a tangle stops the part while its strands drape beyond the outline, and what one view
+    may read as new material on a normal print (a shadow edge at the rim, the part's own side beyond a
+    misplaced outline, a flickering skirt line) comes with a part that keeps rising. Other views of a tangle
+    often see no strands beyond the outline (they hang inside it, or over what was seen before): the growth
+    test is the second witness.
     """
     seen = {cam: a for cam, a in areas.items() if a is not None and a >= two_views_mm2}
     slowed = ""
@@ -215,7 +216,7 @@ def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = 
         if not seen:
             return None
         if viewpoints({cam: (directions or {}).get(cam) for cam in seen}) < 2:
-            if rise_pct is None or rise_pct >= SLOWED_RISE_PCT or len(areas) < 2:
+            if rise_pct is None or rise_pct >= SLOWED_RISE_PCT:
                 return None
             slowed = f" while the part rose {rise_pct:.0f}% of the expected height"
     views = ", ".join(f"{cam} {a:.0f} mm²" for cam, a in sorted(seen.items(), key=lambda kv: -kv[1]))

@@ -69,14 +69,13 @@ def test_a_stop_between_two_checks_is_read_against_the_last_check_that_rose():
     from octoprint_printwatch.core.pipeline import missing_since_rise
     s = DetectionSettings()
     # the state a view keeps: its missing material at the check that rose, while it reads a stall since
-    kept = missing_since_rise(None, 100.0, 0.0, s.min_growth_pct)       # check 12: rose, 0 % missing
-    assert kept == 0.0
-    kept = missing_since_rise(kept, 0.0, 0.0, s.min_growth_pct)         # check 13: the stop
-    assert kept == 0.0
-    # any other reading (a rise of 15-50 %, an outline that sank, none at all) forgets it
-    assert missing_since_rise(0.0, 30.0, 1.0, s.min_growth_pct) is None
-    assert missing_since_rise(0.0, -40.0, 1.0, s.min_growth_pct) is None
-    assert missing_since_rise(0.0, None, 1.0, s.min_growth_pct) is None
+    kept, quiet = missing_since_rise(None, 100.0, 0.0, s.min_growth_pct)    # check 12: rose, 0 % missing
+    assert (kept, quiet) == (0.0, 0)
+    kept, quiet = missing_since_rise(kept, 0.0, 0.0, s.min_growth_pct, quiet, 7.0)   # check 13: the stop
+    assert (kept, quiet) == (0.0, 1)                                    # (nothing missing yet: one quiet check)
+    # any other reading (a rise of 15-50 %, an outline that sank) forgets it
+    assert missing_since_rise(0.0, 30.0, 1.0, s.min_growth_pct)[0] is None
+    assert missing_since_rise(0.0, -40.0, 1.0, s.min_growth_pct)[0] is None
     # check 14: both views read no rise, 3.9 / 4.1 % missing; at check 13 they read 0 % (rise_before) and
     # missed nothing (missing_before)
     now = {"s0L": view("s0L", coarse=0.0, band_missing=10.8, missing=3.86),
@@ -93,3 +92,46 @@ def test_a_stop_between_two_checks_is_read_against_the_last_check_that_rose():
     fine = dict(now, s1=view("s1", growth=95.0))
     assert decide(fine, {}, s, **before, missing_at_rise={"s0L": 0.0, "s0R": 0.0})[0] == "ok"
     assert decide(now, {}, s, **before, missing_at_rise={"s0L": 0.0, "s0R": 0.0}, top_closing=True)[0] == "ok"
+
+
+def test_a_view_keeps_its_rise_through_checks_where_the_model_gives_it_nothing_to_read():
+    """Cross-check seed 8 020_runout (a stack on blue tape, two cameras; s0 looks down and sees the upper tier
+    inside the lower one's silhouette, so only s1 can see the stop). s1 read the part rising at check 4 (coarse
+    60 %, 0 % missing), no rise at check 5 (3.3 % missing), then no reading at checks 6-7: the upper tier is
+    printed inside the silhouette of the lower one there, so the model's outline does not rise in this view at
+    all (0 columns) and a runout and a normal print look the same. At check 8 s1 reads no rise with 6.7 %
+    missing. HEAD forgot the rise at the first check without a reading, and s1's missing material (one camera of
+    two) never counted: the print was never paused."""
+    from octoprint_printwatch.core.pipeline import missing_since_rise
+    s = DetectionSettings()
+    state = missing_since_rise(None, 60.0, 0.0, s.min_growth_pct)                       # check 4
+    for rise, missing in ((0.0, 3.27), (None, 3.30), (None, 4.71)):                     # checks 5-7
+        state = missing_since_rise(*state[:1], rise, missing, s.min_growth_pct, state[1], 7.0)
+    assert state[0] == 0.0
+    # check 8: s1 reads no rise with 6.7 % missing, s0 (no reading at all, nothing missing) passes
+    now = {"s0": view("s0"), "s1": view("s1", coarse=0.0, band_missing=21.5, missing=6.71)}
+    before = dict(rise_before={"s1": None}, missing_before={"s0": 0.0, "s1": 4.71})
+    assert decide(now, {}, s, **before)[0] == "ok"                                      # HEAD: forgotten
+    verdict, reasons = decide(now, {}, s, **before, missing_at_rise={"s1": state[0]})
+    assert verdict == "fail" and any("not grown as expected" in r for r in reasons)
+
+
+def test_a_view_that_reads_no_rise_while_nothing_goes_missing_forgets_its_rise():
+    """Cross-check seed 1 007_normal s0R (a normal print): one coarse reading of 100 % at check 4, then 0 % at
+    every check with nothing missing (the view cannot see this part's top rise), then none at checks 11-13 (a
+    tier inside the silhouette), then 0 % with a passing 19.9 % missing at check 15. A stop late in an interval
+    may show nothing missing at the first check after it, never at the second: the rise is forgotten there."""
+    from octoprint_printwatch.core.pipeline import RISE_QUIET_CHECKS, missing_since_rise
+    s = DetectionSettings()
+    state = missing_since_rise(None, 100.0, 0.0, s.min_growth_pct)                      # check 4
+    state = missing_since_rise(*state[:1], 0.0, 0.0, s.min_growth_pct, state[1], 7.0)   # check 5: quiet, kept
+    assert state == (0.0, 1) and RISE_QUIET_CHECKS == 2
+    state = missing_since_rise(*state[:1], 0.0, 0.19, s.min_growth_pct, state[1], 7.0)  # check 6: forgotten
+    assert state[0] is None
+    # no reading keeps nothing that is forgotten
+    assert missing_since_rise(None, None, 19.9, s.min_growth_pct, 0, 7.0)[0] is None
+    # material going missing is not quiet: kept however many checks it takes
+    state = (0.0, 1)
+    for missing in (2.0, 3.0, 3.2):
+        state = missing_since_rise(*state[:1], 0.0, missing, s.min_growth_pct, state[1], 7.0)
+    assert state == (0.0, 1)

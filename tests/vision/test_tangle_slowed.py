@@ -26,7 +26,9 @@ def test_one_view_of_new_material_counts_only_while_the_part_slowed():
     assert reason is not None and "a 7 mm²" in reason and "rose 30%" in reason
     assert loose_material(one_view, rise_pct=SLOWED_RISE_PCT) is None            # rising as the model says
     assert loose_material({"a": TWO_VIEWS_MM2 - 1, "b": 0.0}, rise_pct=0.0) is None   # too little material
-    assert loose_material({"a": ONE_VIEW_MM2 - 1}, rise_pct=0.0) is None   # one camera: nothing to corroborate
+    assert loose_material({"a": ONE_VIEW_MM2 - 1}) is None         # one camera without a rise reading: not enough
+    # one camera whose own outline rose under half: its growth test corroborates (test_slowed_part_stopped_earlier)
+    assert loose_material({"a": TWO_VIEWS_MM2 + 1}, rise_pct=0.0) is not None
     # loops at the foot (the bed-marks zone) seen by one camera count too, from one side
     foot = loose_material({"a": 0.0, "b": 0.0}, with_foot={"a": TWO_VIEWS_MM2 + 2, "b": 0.0},
                           directions={"a": 0.0, "b": np.radians(8.0)}, rise_pct=20.0)

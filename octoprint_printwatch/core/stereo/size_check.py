@@ -52,6 +52,9 @@ MIN_CHANGED_FRACTION = 0.05
 NEW_BAND_REACH_PX = 4
 #: and this far (px) inside the part's silhouette (the bed's noise and the shake at the outline)
 INSIDE_PX = 4
+#: the previous picture is registered onto the current one within this many px (whole-pixel alignment
+#: differs by a pixel between checks; shake)
+REGISTER_PX = 2
 #: a change of fewer grey levels is JPEG's quantisation
 CHANGE_FLOOR = 4.0
 #: 'rims': silhouette-edge stereo on rectified rows; 'dense': the matcher's points (the seed's way);
@@ -554,6 +557,13 @@ class PairSizeCheck:
             old = inside & (cv2.dilate(new, _disc(NEW_BAND_REACH_PX + 4)) == 0)
             if zone.sum() < 20 or old.sum() < 100:
                 return None
+            # The two frames were each moved back by their own check's shift, and whole-pixel alignment can
+            # differ by a pixel between checks (or the camera shook): the older surface's edges and texture
+            # then read as change and its 99th percentile hides the new band's. The older surface did not
+            # change, so the previous picture is registered onto this one where it changes least.
+            b = _registered(b, c, old, zone, REGISTER_PX)
+            if b is None:
+                return None
             gain = float(np.median(c[old])) / max(float(np.median(b[old])), 1.0)
             change = np.abs(c - gain * b)
             limit = max(float(np.quantile(change[old], 0.99)), CHANGE_FLOOR)
@@ -956,6 +966,34 @@ def foreground_mask(background: np.ndarray, frame: np.ndarray, prior: np.ndarray
 
 def _disc(radius: int) -> np.ndarray:
     return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * radius + 1, 2 * radius + 1))
+
+
+def _registered(before: np.ndarray, now: np.ndarray, still: np.ndarray, used: np.ndarray,
+                reach: int) -> np.ndarray | None:
+    """``before`` translated by the whole-pixel shift within ``reach`` px that leaves the least change
+    (99th percentile, after matching the exposure) on ``still`` (surface that did not change between the
+    two pictures). Pixels outside the box of ``still | used`` are left as they were. None when that box
+    is too close to the frame's border to move."""
+    ys, xs = np.nonzero(still | used)
+    h, w = now.shape[:2]
+    y0, y1, x0, x1 = ys.min(), ys.max() + 1, xs.min(), xs.max() + 1
+    if y0 < reach or x0 < reach or y1 > h - reach or x1 > w - reach:
+        return None
+    now_c, still_c = now[y0:y1, x0:x1], still[y0:y1, x0:x1]
+    ref = now_c[still_c]
+    best, best_q = None, np.inf
+    for dy in range(-reach, reach + 1):
+        for dx in range(-reach, reach + 1):
+            moved = before[y0 - dy:y1 - dy, x0 - dx:x1 - dx]
+            seen = moved[still_c]
+            gain = float(np.median(ref)) / max(float(np.median(seen)), 1.0)
+            q = float(np.quantile(np.abs(ref - gain * seen), 0.99)) + 1e-3 * (abs(dx) + abs(dy))
+            if q < best_q:
+                best, best_q = (dx, dy), q
+    out = before.copy()
+    dx, dy = best
+    out[y0:y1, x0:x1] = before[y0 - dy:y1 - dy, x0 - dx:x1 - dx]
+    return out
 
 
 def _grey(frame: np.ndarray) -> np.ndarray:
