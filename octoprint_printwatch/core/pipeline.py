@@ -437,6 +437,25 @@ def missing_since_rise(kept: float | None, rise: float | None, missing: float,
     return kept, quiet
 
 
+def rise_for_loose_material(usable: Mapping[str, ShapeResult], growth: Sequence[float]) -> float | None:
+    """The part's rise since the previous check (% of the expected) that :func:`core.tangle.loose_material` weighs
+    (``rise_pct``), or None: the median of ``growth`` (the fine readings, ``ShapeResult.growth_pct``, of -15 % or
+    more) when two or more views measured it, or the only usable camera did (there is no other view to ask);
+    else, where views read the rise coarsely (``coarse_growth_pct``: a part seen small, a rise of 4-6 px per
+    check), the median over the views of each one's fine reading or else its coarse one, under the same
+    condition. A coarse reading is +-25 %, and a view that cannot see the top rise reads 0 at every check, so
+    alone it proves nothing (a normal print reads under 50 % at a few checks); here it is only the second
+    witness of material new beyond the outline, which such a check of a normal print does not show: a part
+    knocked off or stopped under a pile of strands does both."""
+    if len(growth) >= 2 or (growth and len(usable) == 1):
+        return float(np.median(growth))
+    readings = [r.growth_pct if r.growth_pct is not None else r.coarse_growth_pct for r in usable.values()]
+    readings = [g for g in readings if g is not None and g >= -15.0]
+    if len(readings) >= 2 or (readings and len(usable) == 1):
+        return float(np.median(readings))
+    return None
+
+
 def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings: DetectionSettings,
            unreadable: Mapping[str, str] | Sequence[str] = (), *,
            layer_shift: LayerShift | None = None, top_closing: bool = False,
@@ -491,7 +510,9 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       (``ShapeResult.new_outside``), at least 6 mm^2 in two usable views, or 30 mm^2 when only one camera
       is usable, or 6 mm^2 counting blobs in the bed-marks zone in cameras on two different sides, or
       in one view while the part's outline rose under half the expected height (median of two or more views,
-      or the only usable camera's own reading; not where a top surface closes) (:func:`core.tangle.loose_material`);
+      or the only usable camera's own reading, where too few views read it finely each view's coarse reading
+      standing in: :func:`rise_for_loose_material`; not where a top surface closes)
+      (:func:`core.tangle.loose_material`);
     * unknown when no camera and no pair gave usable evidence; ok otherwise.
     """
     if layer_shift is None:
@@ -636,6 +657,10 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     if layer_shift is not None and confirms_layer_shift(layer_shift, settings.layer_shift_mm):
         fail_reasons.append(describe_layer_shift(layer_shift))
         shape_fail = True
+    # The rise the loose-material rule weighs: the median of the fine readings (two or more views, or a one-camera
+    # rig's own); where they are too few (a part seen small: a rise of 4-6 px per check), each view's fine reading
+    # or else its coarse one (``coarse_growth_pct``, +-25 %) stands in (rise_for_loose_material)
+    rise_pct = None if top_closing else rise_for_loose_material(usable, growth)
     tangle = loose_material({cam: None if r.new_outside is None else r.new_outside.area_mm2
                              for cam, r in usable.items()},
                             with_foot={cam: r.new_outside.with_foot_mm2 for cam, r in usable.items()
@@ -644,9 +669,7 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
                                         if r.new_outside is not None},
                             # (not where a top surface closes: a ridge's or apex's last layers are too thin
                             # for the outline to show them rise, so a normal part reads 0 % there)
-                            # (on a one-camera rig its own reading: there is no other view to ask)
-                            rise_pct=(float(np.median(growth)) if (len(growth) >= 2 or (growth and len(usable) == 1))
-                                      and not top_closing else None))
+                            rise_pct=rise_pct)
     if tangle is not None:
         fail_reasons.append(tangle)
         shape_fail = True

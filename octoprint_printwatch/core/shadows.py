@@ -70,7 +70,14 @@ def shadow_left(luma_f: np.ndarray, luma_b: np.ndarray, sample: np.ndarray, brig
     y0, y1, x0, x1 = box
     inner = (slice(y0, y1), slice(x0, x1))
     wanted = candidate[inner]
-    passed = wanted & _shading_only(luma_f[inner], luma_b[inner], bright_noise, factor, prior[inner], wanted)
+    passed = np.zeros(wanted.shape, bool)
+    # ... and, where the candidates lie in separate groups (often both sides of the part), the box around
+    # each group (its pixels are _READS px inside it or at the crop's edge) gives the same answer again
+    for (b0, b1, a0, a1), own in _candidate_groups(wanted):
+        box_in = (slice(b0, b1), slice(a0, a1))
+        fy, fx = slice(y0 + b0, y0 + b1), slice(x0 + a0, x0 + a1)
+        passed[box_in] |= own & _shading_only(luma_f[fy, fx], luma_b[fy, fx], bright_noise, factor,
+                                              prior[fy, fx], own)
     # (regions are grouped across gaps of a few pixels: grain and noise break a shadow's area up)
     grouped = cv2.dilate(passed.astype(np.uint8), np.ones((7, 7), np.uint8))
     count, labels = cv2.connectedComponents(grouped, connectivity=8)
@@ -81,6 +88,59 @@ def shadow_left(luma_f: np.ndarray, luma_b: np.ndarray, sample: np.ndarray, brig
         large[0] = False
         passed &= large[labels]
     out[inner] = passed
+    return out
+
+
+#: Grouping the candidates costs a few passes over their box; a separate box per group is worth it only
+#: where it saves at least this many pixels (each box costs a fixed overhead of calls too).
+_BOX_OVERHEAD_PX = 4000
+#: At most this many separate boxes (the rest: one box around several groups).
+_MAX_BOXES = 8
+
+
+def _candidate_groups(wanted: np.ndarray) -> list[tuple[tuple[int, int, int, int], np.ndarray]]:
+    """The candidates ``wanted`` ((h, w) bool, padded by _READS around its candidates, or at the image's
+    edge) split into groups by empty bands of rows or columns wider than two reads, each with its box
+    (the group's bounding box padded by _READS, clipped to ``wanted``: every pixel its candidates read):
+    [((y0, y1, x0, x1), own (y1-y0, x1-x0) bool: the group's candidates in its box)]. One group, or no
+    saving worth a box's fixed cost: the whole of ``wanted``."""
+    h, w = wanted.shape
+    leaves = []
+
+    def split(y0, y1, x0, x1, axis_first):
+        piece = wanted[y0:y1, x0:x1]
+        for axis in (axis_first, 1 - axis_first):
+            filled = np.flatnonzero(piece.any(axis=1 - axis))  # rows (axis 0) or columns (axis 1) with candidates
+            cuts = np.flatnonzero(np.diff(filled) > 2 * _READS + 1)
+            if cuts.size:
+                starts = np.concatenate([filled[:1], filled[cuts + 1]])
+                ends = np.concatenate([filled[cuts], filled[-1:]]) + 1
+                for a, b in zip(starts.tolist(), ends.tolist()):
+                    if axis == 0:
+                        sub = wanted[y0 + a:y0 + b, x0:x1]
+                        cols = np.flatnonzero(sub.any(axis=0))
+                        split(y0 + a, y0 + b, x0 + int(cols[0]), x0 + int(cols[-1]) + 1, 1)
+                    else:
+                        sub = wanted[y0:y1, x0 + a:x0 + b]
+                        rows = np.flatnonzero(sub.any(axis=1))
+                        split(y0 + int(rows[0]), y0 + int(rows[-1]) + 1, x0 + a, x0 + b, 0)
+                return
+        leaves.append((y0, y1, x0, x1))
+
+    rows, cols = np.flatnonzero(wanted.any(axis=1)), np.flatnonzero(wanted.any(axis=0))
+    if rows.size == 0:
+        return [((0, h, 0, w), wanted)]
+    split(int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1, 1)
+    boxes = [(max(0, y0 - _READS), min(h, y1 + _READS), max(0, x0 - _READS), min(w, x1 + _READS))
+             for y0, y1, x0, x1 in leaves]
+    if len(boxes) == 1 or len(boxes) > _MAX_BOXES \
+            or sum((b[1] - b[0]) * (b[3] - b[2]) + _BOX_OVERHEAD_PX for b in boxes) >= h * w:
+        return [((0, h, 0, w), wanted)]
+    out = []
+    for (y0, y1, x0, x1), (ly0, ly1, lx0, lx1) in zip(boxes, leaves):
+        own = np.zeros((y1 - y0, x1 - x0), bool)
+        own[ly0 - y0:ly1 - y0, lx0 - x0:lx1 - x0] = wanted[ly0:ly1, lx0:lx1]
+        out.append(((y0, y1, x0, x1), own))
     return out
 
 

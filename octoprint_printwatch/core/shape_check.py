@@ -264,6 +264,7 @@ def material_evidence(
     bed_factor: float = 2.5,
     previous: np.ndarray | None = None,
     part: np.ndarray | None = None,
+    palette: np.ndarray | None = None,
 ) -> Evidence:
     """Background removal on one crop.
 
@@ -279,6 +280,9 @@ def material_evidence(
     part : (h, w) bool or None, the expected silhouette (grown by the outline tolerance): a lit face of a
         part in the bed's colour looks like the bed brightened, so there only the bed's own grain tells a
         shadow that left (core/shadows.py); None: the whole prior.
+    palette : (k, 3) the part's colours seen at earlier checks (:func:`part_palette`), or None: sampled pixels
+        that took the part's colour (:func:`took_the_part_colour`: a part fallen onto the bed, its strands)
+        are material, not the bed's noise, and are left out of the noise levels.
     """
     sample_mask = bed_sample if int(bed_sample.sum()) >= 50 else ~prior
     sample = np.flatnonzero(sample_mask)
@@ -318,7 +322,16 @@ def material_evidence(
     np.maximum(texture, 0.0, out=texture)
 
     cues = {"chroma": chroma, "bright": bright, "dark": dark, "texture": texture}
-    noise = {name: _noise_scale(cue, sample, _NOISE_FLOOR[name]) for name, cue in cues.items()}
+    # the noise levels are the empty bed's: a part that fell onto the sampled bed (a white cylinder tipped over
+    # 18 % of it made the 90th percentile the part's own change, chromaticity 171 where 3 is normal, and nothing
+    # counted as material) is left out; a change of light keeps the bed's colour and stays in
+    noise_sample = sample
+    if palette is not None and sample.size:
+        rows, cols = np.divmod(sample, background.shape[1])
+        took = took_the_part_colour(cv2.blur(fr, (5, 5))[rows, cols], cv2.blur(bg, (5, 5))[rows, cols], palette)
+        if sample.size - int(took.sum()) >= 50:
+            noise_sample = sample[~took]
+    noise = {name: _noise_scale(cue, noise_sample, _NOISE_FLOOR[name]) for name, cue in cues.items()}
     z = {name: cue * (1.0 / noise[name]) for name, cue in cues.items()}
     # darker than any plausible shadow is material anywhere
     # (on the 5x5 mean: sensor noise in a shadow on a dark bed pushes single pixels under the ratio,
@@ -331,8 +344,10 @@ def material_evidence(
     deep_dark &= prior | edges
     # a shadow on a bed with a saturated channel seems to change its colour (the clipped channel's true
     # value is unknown): ratio constancy on the other channels tells it (core/shadows.py)
-    chroma_strong = np.where(shade_of_clipped_bed(fr, bg, background >= 250, material_factor * noise["chroma"],
-                                                  where=z["chroma"] > material_factor), 0.0, z["chroma"])
+    # (np.where's value, set by a masked store on a copy: most pixels keep theirs)
+    chroma_strong = _zero_where(z["chroma"], shade_of_clipped_bed(fr, bg, background >= 250,
+                                                                  material_factor * noise["chroma"],
+                                                                  where=z["chroma"] > material_factor))
     # a shadow of the parked head or gantry that lay here in the background frame and has moved away
     # brightens the bed without changing its colour or pattern (core/shadows.py): a weak cue there, like
     # darkening
@@ -343,11 +358,11 @@ def material_evidence(
         seen = previous & prior
         if int(seen.sum()) >= 50 and float(np.median(z["chroma"][seen])) > material_factor:
             grain_needed = np.zeros_like(prior)
-    bright_strong = np.where(shadow_left(luma_f, luma_b, sample, noise["bright"], material_factor,
-                                         where=(z["bright"] > material_factor) & (chroma_strong <= material_factor),
-                                         min_ratio=SHADOW_MIN_RATIO, prior=grain_needed,
-                                         surroundings=prior),
-                             0.0, z["bright"])
+    bright_strong = _zero_where(z["bright"], shadow_left(luma_f, luma_b, sample, noise["bright"], material_factor,
+                                                         where=(z["bright"] > material_factor)
+                                                         & (chroma_strong <= material_factor),
+                                                         min_ratio=SHADOW_MIN_RATIO, prior=grain_needed,
+                                                         surroundings=prior))
     strong = np.maximum(chroma_strong, bright_strong)
     # (a shadow that left, where the bed's grain shows through, is the bed even inside the prior: a part
     # there would hide the grain; counting it kept a stalled part's missing top "seen" under the head's
@@ -370,11 +385,48 @@ def material_evidence(
                     changed_bed_fraction=changed)
 
 
+#: A pixel took the part's colour where its chromaticity moved from the bed's to within this share of the
+#: distance between the bed's and a part colour's (the rest is left to blur, JPEG and shading) ...
+PART_COLOUR_REACHED_SHARE = 0.3
+
+
+def took_the_part_colour(frame: np.ndarray, background: np.ndarray, palette: np.ndarray) -> np.ndarray:
+    """(n,) bool: the pixels whose colour in ``frame`` ((n, 3) BGR) is one of the part's (``palette``, (k, 3))
+    where ``background`` ((n, 3), at the frame's exposure) had another: the part's material now covers them.
+
+    Chromaticity only (a face of the part in another light keeps its colour), distances in grey levels at the
+    part colour's brightness: the bed's colour must lie a clear colour change (0.6 x _CHANGED_LEVELS) from the
+    part colour, and the frame's within PART_COLOUR_REACHED_SHARE of that distance from it. A change of light
+    (a glare or shadow that came or went, a reflection that moved) keeps the bed's colour, or moves it towards
+    the light's; a dark pixel's noisy chromaticity is not read at its own brightness. Blur both images first:
+    single noisy pixels of a dark bed take any colour."""
+    out = np.zeros(len(frame), bool)
+    if len(frame) == 0 or palette is None or len(palette) == 0:
+        return out
+    _, c1_f, c2_f = _luma_chroma(np.asarray(frame, np.float32))
+    _, c1_b, c2_b = _luma_chroma(np.asarray(background, np.float32))
+    luma_p, c1_p, c2_p = _luma_chroma(np.asarray(palette, np.float32))
+    for lp, a, b in zip(luma_p, c1_p, c2_p):
+        scale = (float(lp) + 6.0) * 0.01
+        to_bed = np.hypot(c1_b - a, c2_b - b) * scale
+        to_frame = np.hypot(c1_f - a, c2_f - b) * scale
+        out |= (to_bed > 0.6 * _CHANGED_LEVELS) & (to_frame < PART_COLOUR_REACHED_SHARE * to_bed)
+    return out
+
+
 def _gradient(luma: np.ndarray) -> np.ndarray:
     gx = np.abs(cv2.Sobel(luma, cv2.CV_32F, 1, 0, ksize=3))
     gx += np.abs(cv2.Sobel(luma, cv2.CV_32F, 0, 1, ksize=3))
     out = cv2.blur(gx, (3, 3))
     out *= 0.25
+    return out
+
+
+def _zero_where(value: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """``np.where(mask, 0.0, value)`` for a float32 ``value``: a copy of it with the pixels of ``mask`` set to
+    0 (a masked store touches only those, usually few)."""
+    out = value.copy()
+    out[mask] = 0.0
     return out
 
 
@@ -391,12 +443,14 @@ def _hypot(x: np.ndarray, y: np.ndarray) -> np.ndarray:
 def part_palette(frame: np.ndarray, mask: np.ndarray, groups: int = 5) -> np.ndarray | None:
     """(groups, 3) float32 typical colours of the part: the frame's pixels under ``mask`` sorted by
     brightness and averaged in equal groups (lit faces to shaded ones). None when too few pixels."""
-    pixels = frame[mask]
-    if len(pixels) < 50:
+    # (the sampled pixels are gathered alone: the same pixels, in the same order, as frame[mask][::step])
+    index = np.flatnonzero(mask)
+    if index.size < 50:
         return None
-    if len(pixels) > 4000:
-        pixels = pixels[:: len(pixels) // 4000 + 1]
-    pixels = pixels.astype(np.float32)
+    if index.size > 4000:
+        index = index[:: index.size // 4000 + 1]
+    rows, cols = np.divmod(index, mask.shape[1])
+    pixels = frame[rows, cols].astype(np.float32)
     order = np.argsort(pixels.sum(axis=1))
     return np.stack([chunk.mean(axis=0) for chunk in np.array_split(pixels[order], groups)])
 
@@ -1101,7 +1155,7 @@ def check_shape(
 
     evidence = material_evidence(background[crop], frame[crop], prior, bed_sample,
                                  material_factor=material_factor, bed_factor=bed_factor, previous=previous,
-                                 part=distance <= tol)
+                                 part=distance <= tol, palette=palette)
     cleaned = clean_mask(evidence.material)
     holes = enclosed(cleaned) & (distance <= shift_bound) if cleaned.any() else np.zeros_like(cleaned)
     observed = cleaned | holes
@@ -1177,13 +1231,13 @@ def check_shape(
                                        evidence, material_factor)
         return out
 
+    followed_before = (foreign_before[crop].astype(bool)
+                       if foreign_before is not None and foreign_before.shape == (h, w) else None)
     comparison = compare_masks(observed, bed_evidence, expected_a, band_a, search_a,
                                dont_care_a, tol, band_reach=max(2 * tol, shift_bound),
                                flat_max_px=regions.flat_max_px, reflection=reflection_a,
                                top_tolerance=tol, linked=~evidence.bed, not_the_prints=not_the_prints,
-                               foreign_before=(foreign_before[crop].astype(bool)
-                                               if foreign_before is not None and foreign_before.shape == (h, w)
-                                               else None))
+                               foreign_before=followed_before)
 
     # Growth since the previous check: the same camera, the same processing, so calibration and
     # alignment errors cancel; a part that stopped growing (runout, clog, spaghetti) shows none of the
@@ -1248,7 +1302,12 @@ def check_shape(
     if seen_before is not None:
         new_outside = new_material(observed, seen_before, expected_a, search_a, tol, regions.px_per_mm,
                                    ignore=reflection_a, marks=dont_care_a, linked=~evidence.bed,
-                                   bed_to_image=regions.bed_to_image, not_the_prints=not_part_colour)
+                                   bed_to_image=regions.bed_to_image, not_the_prints=not_part_colour,
+                                   # (compare_masks' objects from above, on the same masks: the same
+                                   # answer, unless it followed objects of the previous check)
+                                   foreign=(comparison.foreign if comparison.foreign is not None
+                                            and (followed_before is None or not followed_before.any())
+                                            else None))
 
     reasons: list[str] = []
     decisive = False

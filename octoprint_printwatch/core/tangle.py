@@ -86,6 +86,7 @@ def new_material(
     attach_px: float = 3.0,
     bed_to_image: np.ndarray | None = None,
     not_the_prints: Callable[[np.ndarray], np.ndarray] | None = None,
+    foreign: np.ndarray | None = None,
 ) -> NewMaterial | None:
     """Material seen now and not at the previous check, outside the expected part and attached to it.
 
@@ -108,6 +109,10 @@ def new_material(
     not_the_prints : ((h, w) bool material -> (h, w) bool) or None: marks the blobs of the material outside the
         outline that are something else (check_shape: not of the part's colour, a shadow); they never count.
         Called only when there is new material to count (most checks have none).
+    foreign : (h, w) bool or None: the material of the objects reaching in from above the search box, as
+        compare_masks found them on the same masks (``observed``, ``expected``, ``search``, ``linked``, the
+        same tolerance) with no objects of a previous check to follow; given, it is not searched again
+        (the same pixels: ``new`` lies in ``observed``). None: searched here.
     Returns None when the test cannot be made (no scale, no previous mask, empty expected part).
     """
     if px_per_mm <= 0 or previous is None or previous.shape != observed.shape or not expected.any():
@@ -139,7 +144,9 @@ def new_material(
     # objects reaching in from above the search box are not the print's (the hotend, the gantry), grouped
     # with everything not confidently bed as in compare_masks (the nozzle and its dark body are one object);
     # nor are strands leaving the box upwards on their own (filament pulled towards the parked nozzle)
-    new &= ~reaching_in_from_above(outside if linked is None else outside | (linked & ~grown), search, expected)
+    if foreign is None:
+        foreign = reaching_in_from_above(outside if linked is None else outside | (linked & ~grown), search, expected)
+    new &= ~foreign
     new &= ~reaching_in_from_above(outside, search, expected)
     count, labels, stats, _ = cv2.connectedComponentsWithStats(new.astype(np.uint8), connectivity=8)
     keep = np.ones(count, bool)

@@ -3,9 +3,12 @@ random inputs (exact equality, not a tolerance)."""
 import cv2
 import numpy as np
 
+from octoprint_printwatch.core import shadows
 from octoprint_printwatch.core.layer_shift import _Evidence, _vertical_null, stretched
 from octoprint_printwatch.core.masks import bounding_box
-from octoprint_printwatch.core.shape_check import _hypot, _luma_chroma
+from octoprint_printwatch.core.shape_check import (
+    _hypot, _luma_chroma, _zero_where, compare_masks, material_evidence, part_palette)
+from octoprint_printwatch.core.tangle import new_material
 
 
 def _vertical_null_plain(evidence, before, band, reach_y):
@@ -79,3 +82,174 @@ def test_luma_chroma_of_uint8_and_float32_is_the_plain_float_form():
         for fast, plain in zip(_luma_chroma(source), _luma_chroma_plain(source)):
             assert fast.dtype == plain.dtype == np.float32
             assert np.array_equal(fast, plain)
+
+
+# ------------------------------------------------ twelfth session: more exact speed-ups
+
+
+def _shadow_scene(rng):
+    """A grained bed, a part in the middle, shadows in the background frame that have left by the frame
+    (lit again), in several separate places: uint8 background and frame, prior, bed sample, previous, part."""
+    h, w = (int(v) for v in rng.integers(120, 260, size=2))
+    grain = cv2.GaussianBlur(rng.normal(0, rng.uniform(2, 12), (h, w)).astype(np.float32), (0, 0),
+                             rng.uniform(0.6, 2))
+    tint = rng.uniform(60, 200, 3)
+    bed = np.clip(tint[None, None, :] + grain[..., None] * rng.uniform(0.5, 1.5, 3), 0, 255)
+    background, frame = bed.copy(), bed.copy()
+    for _ in range(int(rng.integers(1, 6))):   # shadows of the head that lay here in the background frame
+        y, x = int(rng.integers(0, h - 10)), int(rng.integers(0, w - 10))
+        sh, sw = int(rng.integers(8, h // 2)), int(rng.integers(8, w // 2))
+        background[y:y + sh, x:x + sw] *= rng.uniform(0.45, 0.9)
+    if rng.random() < 0.5:   # clipped channels on a bright bed
+        background[: h // 3] = np.clip(background[: h // 3] * 1.6, 0, 255)
+    py0, px0 = h // 3, w // 3
+    part = np.zeros((h, w), bool)
+    part[py0:py0 + h // 3, px0:px0 + w // 3] = True
+    frame[part] = rng.uniform(0, 255, 3)
+    for _ in range(int(rng.integers(0, 4))):   # a few strands
+        y, x = int(rng.integers(0, h)), int(rng.integers(0, w))
+        cv2.line(frame, (x, y), (int(rng.integers(0, w)), int(rng.integers(0, h))), rng.uniform(0, 255, 3).tolist(), 2)
+    frame = frame * rng.uniform(0.85, 1.15) + rng.normal(0, rng.uniform(0.5, 4), frame.shape)
+    background = background + rng.normal(0, 1.5, background.shape)
+    background, frame = (np.clip(np.rint(a), 0, 255).astype(np.uint8) for a in (background, frame))
+    prior = cv2.dilate(part.astype(np.uint8), np.ones((15, 15), np.uint8)).astype(bool)
+    bed_sample = ~cv2.dilate(prior.astype(np.uint8), np.ones((21, 21), np.uint8)).astype(bool)
+    previous = part if rng.random() < 0.5 else None
+    grown_part = cv2.dilate(part.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
+    return background, frame, prior, bed_sample, previous, grown_part
+
+
+def _one_box(wanted):
+    """The form before: one box around every candidate."""
+    return [((0, wanted.shape[0], 0, wanted.shape[1]), wanted)]
+
+
+def test_shadow_test_on_each_group_of_candidates_is_the_test_on_their_whole_box(monkeypatch):
+    """shadows.shadow_left on one box per group of candidates answers as on the box around all of them
+    (the form before), on random scenes with several shadows that left; material_evidence unchanged."""
+    rng = np.random.default_rng(12)
+    groups = shadows._candidate_groups
+    for trial in range(60):
+        scene = _shadow_scene(rng)
+        background, frame, prior, bed_sample, previous, part = scene
+        fast = material_evidence(background, frame, prior, bed_sample, previous=previous, part=part)
+        monkeypatch.setattr(shadows, "_candidate_groups", _one_box)
+        plain = material_evidence(background, frame, prior, bed_sample, previous=previous, part=part)
+        monkeypatch.setattr(shadows, "_candidate_groups", groups)
+        for name in ("material", "strong", "bed", "score"):
+            assert np.array_equal(getattr(fast, name), getattr(plain, name)), (trial, name)
+        assert fast.noise == plain.noise and fast.changed_bed_fraction == plain.changed_bed_fraction
+
+
+def test_shadow_left_groups_against_one_box_on_scattered_candidates(monkeypatch):
+    """shadow_left itself, with candidates scattered in separate groups (so the groups are used)."""
+    rng = np.random.default_rng(4)
+    groups = shadows._candidate_groups
+    used = 0
+    for trial in range(80):
+        h, w = (int(v) for v in rng.integers(80, 240, size=2))
+        grain = cv2.GaussianBlur(rng.normal(0, 8, (h, w)).astype(np.float32), (0, 0), 1.0)
+        luma_b = np.clip(100 + grain, 0, 255).astype(np.uint8).astype(np.float32) * np.float32(rng.uniform(0.7, 1.3))
+        luma_f = luma_b * np.float32(rng.uniform(1.0, 1.8)) + rng.normal(0, 1.0, (h, w)).astype(np.float32)
+        luma_f = np.rint(luma_f * 3.0).astype(np.float32) * np.float32(1.0 / 3.0)   # a sum of three channels / 3
+        where = np.zeros((h, w), bool)
+        for _ in range(int(rng.integers(1, 6))):
+            y, x = int(rng.integers(0, h - 4)), int(rng.integers(0, w - 4))
+            where[y:y + int(rng.integers(2, 20)), x:x + int(rng.integers(2, 20))] = True
+        prior = rng.random((h, w)) < 0.3
+        surroundings = np.zeros((h, w), bool)
+        surroundings[h // 4: 3 * h // 4, w // 4: 3 * w // 4] = True
+        sample = np.flatnonzero(~surroundings)[::3]
+        args = (luma_f, luma_b, sample, 1.5, 5.0, where, 0.4, prior, surroundings)
+        used += len(groups(where)) > 1
+        fast = shadows.shadow_left(*args)
+        monkeypatch.setattr(shadows, "_candidate_groups", _one_box)
+        plain = shadows.shadow_left(*args)
+        monkeypatch.setattr(shadows, "_candidate_groups", groups)
+        assert np.array_equal(fast, plain), trial
+    assert used >= 10
+
+
+def test_candidate_groups_partition_the_candidates_with_their_reach():
+    rng = np.random.default_rng(9)
+    for trial in range(300):
+        h, w = (int(v) for v in rng.integers(30, 300, size=2))
+        wanted = rng.random((h, w)) < rng.uniform(0.0001, 0.01)
+        seen = np.zeros((h, w), np.int32)
+        for (y0, y1, x0, x1), own in shadows._candidate_groups(wanted):
+            assert own.shape == (y1 - y0, x1 - x0)
+            assert not (own & ~wanted[y0:y1, x0:x1]).any()
+            seen[y0:y1, x0:x1] += own
+            ys, xs = np.nonzero(own)
+            # every candidate reads _READS px around it: inside its box, or the box reaches the image's edge
+            reads = shadows._READS
+            assert ((ys >= reads) | (y0 == 0)).all() and ((ys + reads < y1 - y0) | (y1 == h)).all()
+            assert ((xs >= reads) | (x0 == 0)).all() and ((xs + reads < x1 - x0) | (x1 == w)).all()
+        assert np.array_equal(seen, wanted.astype(np.int32)), trial
+
+
+def test_zero_where_is_np_where():
+    rng = np.random.default_rng(2)
+    value = np.abs(rng.normal(0, 9, (60, 70))).astype(np.float32)
+    mask = rng.random((60, 70)) < 0.1
+    fast, plain = _zero_where(value, mask), np.where(mask, 0.0, value)
+    assert fast.dtype == plain.dtype and np.array_equal(fast, plain)
+    assert not np.array_equal(value, fast)   # the input is left as it was
+
+
+def _part_palette_plain(frame, mask, groups=5):
+    pixels = frame[mask]
+    if len(pixels) < 50:
+        return None
+    if len(pixels) > 4000:
+        pixels = pixels[:: len(pixels) // 4000 + 1]
+    pixels = pixels.astype(np.float32)
+    order = np.argsort(pixels.sum(axis=1))
+    return np.stack([chunk.mean(axis=0) for chunk in np.array_split(pixels[order], groups)])
+
+
+def test_part_palette_gathers_the_same_pixels():
+    rng = np.random.default_rng(6)
+    for trial in range(100):
+        full = rng.integers(0, 256, (150, 200, 3), dtype=np.uint8)
+        frame = full[10:140, 20:190]   # a crop's strided view, as check_shape passes it
+        mask = rng.random(frame.shape[:2]) < rng.choice([0.001, 0.01, 0.1, 0.5, 0.9])
+        fast, plain = part_palette(frame, mask), _part_palette_plain(frame, mask)
+        assert (fast is None) == (plain is None)
+        if fast is not None:
+            assert fast.dtype == plain.dtype and np.array_equal(fast, plain), trial
+
+
+def test_new_material_with_compare_masks_objects_from_above_is_new_material_alone():
+    """new_material(..., foreign=compare_masks(...).foreign) == new_material(...) when no objects of a
+    previous check are followed (random parts, hanging objects, strands)."""
+    rng = np.random.default_rng(11)
+    counted = 0
+    for trial in range(200):
+        h, w = (int(v) for v in rng.integers(80, 200, size=2))
+        expected = np.zeros((h, w), bool)
+        ey0, ex0 = int(rng.integers(h // 3, h // 2)), int(rng.integers(w // 4, w // 2))
+        expected[ey0:ey0 + h // 3, ex0:ex0 + w // 4] = True
+        search = np.zeros((h, w), bool)
+        search[int(rng.integers(5, ey0)):, :] = True
+        observed = expected & (rng.random((h, w)) < 0.97)
+        for _ in range(int(rng.integers(1, 8))):   # hanging objects, strands, blobs
+            y, x = int(rng.integers(0, h - 3)), int(rng.integers(0, w - 3))
+            observed[y:y + int(rng.integers(2, 40)), x:x + int(rng.integers(2, 30))] = True
+        linked = observed | (rng.random((h, w)) < 0.05)
+        previous = expected | (rng.random((h, w)) < 0.01)
+        bed = ~linked
+        band = expected & (np.arange(h)[:, None] < ey0 + 5)
+        tol = float(rng.choice([1.0, 2.0, 3.0]))
+        comparison = compare_masks(observed, bed, expected, band, search, np.zeros((h, w), bool), tol,
+                                   band_reach=2 * tol, top_tolerance=tol, linked=linked)
+        kwargs = dict(linked=linked, ignore=None, marks=np.zeros((h, w), bool))
+        plain = new_material(observed, previous, expected, search, tol, 2.0, **kwargs)
+        fast = new_material(observed, previous, expected, search, tol, 2.0, foreign=comparison.foreign, **kwargs)
+        assert (plain is None) == (fast is None)
+        if plain is not None:
+            counted += plain.pixels > 0
+            assert (plain.area_mm2, plain.pixels, plain.blobs, plain.at_foot_mm2) == \
+                (fast.area_mm2, fast.pixels, fast.blobs, fast.at_foot_mm2), trial
+            assert np.array_equal(plain.mask, fast.mask), trial
+    assert counted > 10
