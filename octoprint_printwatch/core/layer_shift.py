@@ -82,6 +82,17 @@ SHIFT_OPPOSITE_MAX = 0.25
 #: The top of the part as one camera sees it may sit this far (px) from where one height error puts it in
 #: every view: that camera's calibration residual.
 HEIGHT_NULL_TOLERANCE_PX = 1
+#: A height error is the same at every check (a camera firing a layer late, a height calibration error): a camera's
+#: evidence for a height that HEIGHT_NULL_REFUTED_CHECKS of its own earlier readings (checks that tested their own
+#: band) read clearly wrong (score, support - 2 x against, at or below minus this many px: the top it saw stood where
+#: the model put it) does not count for that height here. (Its own readings: the null of one view is that camera's
+#: own error; two: one earlier reading can be off itself, a top the colour of the bed read in place at one check and
+#: lower at the next, cross-check seed 8 `028_runout` s1R before its onset.) A layer shift along a camera's line of
+#: sight lowers (or raises) the top in that view only from its onset on, which a part standing lower all along would
+#: have shown at the checks before it too (cross-check seed 9 `035`: one camera, the top 8-15 px lower from the onset
+#: on, which "2.7 mm shorter" explained as well as the shift, 663 against 665; the checks before read it in place).
+HEIGHT_NULL_REFUTED_PX = 60.0
+HEIGHT_NULL_REFUTED_CHECKS = 2
 
 
 @dataclass
@@ -359,24 +370,27 @@ def _band_shift_maps(evidence: _Evidence, before: np.ndarray, band: np.ndarray, 
 
 
 def estimate_layer_shift(views: Mapping[str, BandShift], *, max_mm: float = 8.0,
-                         step_mm: float = 0.25) -> LayerShift | None:
+                         step_mm: float = 0.25, earlier: Sequence[Mapping[str, BandShift]] = ()) -> LayerShift | None:
     """The bed shift (printer X/Y, mm, within ``max_mm``) the cameras' evidence confirms best together.
 
     Each camera contributes its support, against and moved pixels at its own image shift ``J @ D``
     (nearest pixel), weighted by how clearly that shift shows sideways in it (see below); the score is
     support - 2 x against summed over cameras. Cameras without ``bed_to_image`` cannot take part.
-    None when no shift shows clearly to any camera.
+    ``earlier``: the views of earlier checks that tested their own band; a camera's support for a height its own
+    readings there refute does not count in the null (HEIGHT_NULL_REFUTED_PX). None when no shift shows clearly
+    to any camera.
     """
+    refuted = _refuted_heights(earlier)
     steps = np.arange(-max_mm, max_mm + 1e-9, step_mm)
     gx, gy = np.meshgrid(steps, steps)
     grid = np.stack([gx.ravel(), gy.ravel()], axis=1)
-    found = _pooled(views, grid)
+    found = _pooled(views, grid, refuted=refuted)
     if found is not None and found.sides < 2:
         # seen from one side, a move up or down the image is also a part standing taller or lower, or that
         # camera's calibration error (3x the stated one paused a normal print): only sideways counts there
-        found = _pooled(views, grid, vertical=False)
+        found = _pooled(views, grid, vertical=False, refuted=refuted)
     if found is not None:
-        found.opposite = _pooled(views, -found.shift_mm.reshape(1, 2), vertical=found.vertical)
+        found.opposite = _pooled(views, -found.shift_mm.reshape(1, 2), vertical=found.vertical, refuted=refuted)
     return found
 
 
@@ -393,7 +407,43 @@ def layer_shift_at(views: Mapping[str, BandShift], shift_mm, within_mm: float = 
     return _pooled(views, centre + offsets, vertical=vertical)
 
 
-def _pooled(views: Mapping[str, BandShift], grid: np.ndarray, vertical: bool = True) -> LayerShift | None:
+def _refuted_heights(earlier: Sequence[Mapping[str, BandShift]]):
+    """A function of a camera's name and (m,) heights (mm; its top moves by height x its image y px per mm of height)
+    giving (m,) bool: the heights HEIGHT_NULL_REFUTED_CHECKS of that camera's readings at the ``earlier`` checks read
+    clearly wrong (HEIGHT_NULL_REFUTED_PX); None when no camera has that many readings."""
+    readings: dict[str, list] = {}
+    for views in earlier:
+        for name, view in views.items():
+            if view.null_scores is not None and view.height_to_image is not None:
+                readings.setdefault(name, []).append((view.null_scores.astype(np.float64),
+                                                      float(view.height_to_image[1])))
+    readings = {name: read for name, read in readings.items() if len(read) >= HEIGHT_NULL_REFUTED_CHECKS}
+    if not readings:
+        return None
+
+    def refuted(name: str, heights: np.ndarray) -> np.ndarray:
+        out = np.zeros(len(heights), int)
+        # (each reading untolerant: the camera's calibration residual is the same at every check, and the null of
+        # this check already allows it)
+        for scores, k in readings.get(name, ()):
+            r = len(scores) // 2
+            out += scores[np.clip(np.rint(heights * k).astype(int) + r, 0, 2 * r)] <= -HEIGHT_NULL_REFUTED_PX
+        return (out >= HEIGHT_NULL_REFUTED_CHECKS) & (heights != 0)
+    return refuted
+
+
+def _tolerant(scores: np.ndarray) -> np.ndarray:
+    """(2 r + 1,) a camera's null scores with its top allowed HEIGHT_NULL_TOLERANCE_PX off (its calibration
+    residual): the best within that many px."""
+    tolerant = scores.astype(np.float64)
+    for e in range(1, HEIGHT_NULL_TOLERANCE_PX + 1):
+        tolerant = np.maximum(tolerant, np.maximum(np.r_[scores[e:], np.full(e, -np.inf)],
+                                                   np.r_[np.full(e, -np.inf), scores[:-e]]))
+    return tolerant
+
+
+def _pooled(views: Mapping[str, BandShift], grid: np.ndarray, vertical: bool = True,
+            refuted=None) -> LayerShift | None:
     """The best of the (n, 2) bed shifts ``grid`` (mm) by the pooled score (estimate_layer_shift); a camera
     counts the shift's vertical image move beyond its tolerance too unless ``vertical`` is False."""
     total = np.zeros((5, len(grid)), np.float64)
@@ -437,7 +487,7 @@ def _pooled(views: Mapping[str, BandShift], grid: np.ndarray, vertical: bool = T
     if not shows:
         return None
     if heights:
-        null += _height_null(heights)
+        null += _height_null(heights, refuted=refuted)
     score = total[0] - 2.0 * total[1]
     score[(total[2] <= 0) | ~clear] = -np.inf
     best = int(np.argmax(score))
@@ -449,7 +499,8 @@ def _pooled(views: Mapping[str, BandShift], grid: np.ndarray, vertical: bool = T
     min_share = VIEWPOINT_MIN_SHARE * float(total[2, best])
     side_apart = None
     if vertical and heights and len(cameras) >= 2:
-        side_apart = _side_apart(per_camera, best, heights, {name: directions[name] for name in per_camera})
+        side_apart = _side_apart(per_camera, best, heights, {name: directions[name] for name in per_camera},
+                                 refuted=refuted)
     return LayerShift(side_apart=side_apart, shift_mm=grid[best].copy(), support=int(round(total[0, best])),
                       against=int(round(total[1, best])), moved=int(round(total[2, best])), cameras=cameras,
                       null_score=float(null[best]), moved_by=share, overhang=int(round(total[3, best])),
@@ -461,13 +512,13 @@ def _pooled(views: Mapping[str, BandShift], grid: np.ndarray, vertical: bool = T
 
 def _side_apart(per_camera: Mapping[str, np.ndarray], best: int,
                 heights: Mapping[str, tuple[np.ndarray, np.ndarray, float]],
-                directions: Mapping[str, float]) -> tuple[float, float, float, float] | None:
+                directions: Mapping[str, float], refuted=None) -> tuple[float, float, float, float] | None:
     """(support, against, moved, null) of the side (cameras looking from directions within VIEWPOINT_APART_DEG,
     modulo 2 pi, as ``LayerShift.sides``) whose cameras the pooled null (the one height error that fits all views
     best at shift ``best``) explains worst relative to the shift, or None. ``per_camera``: each camera's weighted
     (5, n) values as pooled."""
     at_best = {name: (np.asarray(w)[best:best + 1], scores, k) for name, (w, scores, k) in heights.items()}
-    _, parts = _height_null(at_best, parts=True)
+    _, parts = _height_null(at_best, parts=True, refuted=refuted)
     apart = np.radians(VIEWPOINT_APART_DEG)
     groups: list[list] = []      # [direction, [names]]
     for name in sorted(per_camera, key=lambda n: -float(per_camera[n][2, best])):
@@ -493,29 +544,30 @@ def _side_apart(per_camera: Mapping[str, np.ndarray], best: int,
     return found[1]
 
 
-def _height_null(cameras: Mapping[str, tuple[np.ndarray, np.ndarray, float]], parts: bool = False):
+def _height_null(cameras: Mapping[str, tuple[np.ndarray, np.ndarray, float]], parts: bool = False, refuted=None):
     """(n,) the pooled null of :func:`_pooled`'s n shifts: the best score of one height error (the part standing
     taller or lower by the same millimetres in every view) summed over the cameras, each weighted as in the
     pooling. ``cameras``: {name: ((n,) weight, (2 r + 1,) the band's top moved by dy = index - r scored, image y
     px per mm of height)}. A camera may read its top HEIGHT_NULL_TOLERANCE_PX off (its calibration residual).
     With one camera this is its own best null; cameras on opposite sides of a shift along their line of sight
-    see its top move up in one and down in the other, which no single height explains."""
+    see its top move up in one and down in the other, which no single height explains. ``refuted``: see
+    :func:`_refuted_heights` (a camera's support for a height its own earlier readings refute does not count)."""
     rise = max(abs(k) for _, _, k in cameras.values())
     reach = max(len(scores) // 2 for _, scores, _ in cameras.values())
     # heights half a pixel apart in the camera that sees them move most, over its whole reach
     heights = np.arange(-reach, reach + 1e-9, 0.5) / max(rise, 1e-6)
     weights, scores_at = [], []
-    for weight, scores, k in cameras.values():
+    for name, (weight, scores, k) in cameras.items():
         r = len(scores) // 2
-        tolerant = scores.astype(np.float64)
-        for e in range(1, HEIGHT_NULL_TOLERANCE_PX + 1):
-            tolerant = np.maximum(tolerant, np.maximum(np.r_[scores[e:], np.full(e, -np.inf)],
-                                                       np.r_[np.full(e, -np.inf), scores[:-e]]))
+        tolerant = _tolerant(scores)
         dy = np.rint(heights * k).astype(int)
         # a height beyond this camera's reach moves its top further than it tested: it reads that height as it
         # reads its reach's end (a top seen in place contradicts a taller part more, the further it stands), not
         # as nothing, which let one camera's null stand alone for heights the other camera refutes
-        scores_at.append(tolerant[np.clip(dy + r, 0, 2 * r)])
+        at = tolerant[np.clip(dy + r, 0, 2 * r)]
+        if refuted is not None:
+            at = np.where(refuted(name, heights), np.minimum(at, 0.0), at)
+        scores_at.append(at)
         weights.append(weight)
     # (n, heights): a sum of outer products, not a matrix product: a product this size wakes BLAS's thread
     # pool, whose threads then spin on the other core and slowed the next checks' shape tests by ~15 % CPU

@@ -25,7 +25,8 @@ from .errors import PrintWatchError
 from .settings import DetectionSettings
 from .layer_shift import (BandShift, LayerShift, confirms_layer_shift, describe_layer_shift, estimate_layer_shift,
                           with_history)
-from .shape_check import ExpectedRegions, ShapeResult, check_shape, not_decisive_where_calibrated
+from .shape_check import (GROWTH_SPAN_CHECKS, ExpectedRegions, ShapeResult, check_shape,
+                          not_decisive_where_calibrated)
 from .nest import NEST_MAX_COVERAGE, SOLID_MIN_COVERAGE, STALL_READ_BELOW_GROWTH_PCT
 from .tangle import loose_material
 
@@ -383,8 +384,9 @@ def layer_shift_of(shape: Mapping[str, ShapeResult],
     for the same shift at those checks (``core.layer_shift.with_history``). ``band_shifts``: this check's
     ``band_shifts_of(shape)`` when the caller has it already.
     """
-    return with_history(estimate_layer_shift(band_shifts_of(shape) if band_shifts is None else band_shifts),
-                        history)
+    earlier = [views for tested, views in list(history)[-4:] if tested and views]
+    return with_history(estimate_layer_shift(band_shifts_of(shape) if band_shifts is None else band_shifts,
+                                             earlier=earlier), history)
 
 
 def unseen_by_partner(result: ShapeResult, usable: Mapping[str, ShapeResult], pairs: Sequence[Sequence[str]],
@@ -531,39 +533,62 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     # An outline that sank is not a part that stopped (material does not vanish; a stalled part reads
     # 0 +- one pixel step, about 15 % of a check's rise): that camera was fooled at this check or the
     # previous one (a top face the colour of what lies behind it); readings below -15 % are left out.
+    band_coverage_before = band_coverage_before or {}
+
+    def stall_rules(read: Mapping[str, float]) -> tuple[bool, list]:
+        """Whether the part stalled by the rules below on the growth readings ``read`` (camera -> %, each of -15 %
+        or more), and the views whose newest band is bare (for the reasons)."""
+        measured = {cam: usable[cam] for cam in read}
+        growth = list(read.values())
+        # ... and where the part stopped, its newest layers are missing in a view that sees no rise; without
+        # that, a flat rise is a top skin closing in a colour the camera cannot tell from the bed
+        # (where a top surface closes in the newest layers, ``top_closing``, its smooth skin may read missing
+        # as a whole, like the bed: then only the newest band itself gone counts)
+        band_gone = any(read[cam] < settings.min_growth_pct
+                        and ((r.band_missing_pct or 0.0) >= 25.0
+                             or (not top_closing and r.missing_pct >= r.threshold / 2.0))
+                        for cam, r in measured.items())
+        stalled = bool(growth) and float(np.median(growth)) < settings.min_growth_pct and band_gone
+        # A part rising at under half the expected rate while two views that see it slow each miss part of its
+        # newest band has slowed, not been misread: strands piling on a stopped part lift the outline a little
+        # but fill no band; a face the colour of the bed reads missing but its outline rises fully.
+        # (a view misses part of the newest band, or, where the part stopped before the previous check and the
+        # gap reaches below the band, half the threshold of the whole part, as for band_gone above)
+        slowed_views = [r for cam, r in measured.items()
+                        if read[cam] < 50.0 and ((r.band_missing_pct or 0.0) >= 15.0
+                                                 or r.missing_pct >= r.threshold / 2.0)]
+        stalled = stalled or (not top_closing and len(growth) >= 2 and float(np.median(growth)) < 50.0
+                              and len(slowed_views) >= 2)
+        # A part that stopped under a nest of strands (spaghetti) reads no missing material: the pile fills its
+        # outline. But its newest band, in the part's colours, is then a mesh of strands over the bed or the bed
+        # itself: less than half covered by the part's material, in a view whose band read solid before (a face
+        # in the bed's colour reads bare at every check) and that saw no rise or could not measure one. Not where
+        # a top surface closes (a smooth top skin may look like the bed).
+        bare_band = [r for r in usable.values()
+                     if (r.growth_pct is None or r.growth_pct < settings.min_growth_pct)
+                     and r.band_part_coverage is not None and r.band_part_coverage < NEST_MAX_COVERAGE
+                     and band_coverage_before.get(r.camera, 0.0) >= SOLID_MIN_COVERAGE]
+        stalled = stalled or (not top_closing and bool(growth)
+                              and float(np.median(growth)) < settings.min_growth_pct and bool(bare_band))
+        return stalled, bare_band
+
     measured = {cam: r for cam, r in usable.items() if r.growth_pct is not None and r.growth_pct >= -15.0}
     growth = [r.growth_pct for r in measured.values()]
-    # ... and where the part stopped, its newest layers are missing in a view that sees no rise; without
-    # that, a flat rise is a top skin closing in a colour the camera cannot tell from the bed
-    # (where a top surface closes in the newest layers, ``top_closing``, its smooth skin may read missing
-    # as a whole, like the bed: then only the newest band itself gone counts)
-    band_gone = any(r.growth_pct < settings.min_growth_pct
-                    and ((r.band_missing_pct or 0.0) >= 25.0
-                         or (not top_closing and r.missing_pct >= r.threshold / 2.0))
-                    for r in measured.values())
-    stalled = bool(growth) and float(np.median(growth)) < settings.min_growth_pct and band_gone
-    # A part rising at under half the expected rate while two views that see it slow each miss part of its
-    # newest band has slowed, not been misread: strands piling on a stopped part lift the outline a little
-    # but fill no band; a face the colour of the bed reads missing but its outline rises fully.
-    # (a view misses part of the newest band, or, where the part stopped before the previous check and the
-    # gap reaches below the band, half the threshold of the whole part, as for band_gone above)
-    slowed_views = [r for r in measured.values()
-                    if r.growth_pct < 50.0 and ((r.band_missing_pct or 0.0) >= 15.0
-                                                or r.missing_pct >= r.threshold / 2.0)]
-    stalled = stalled or (not top_closing and len(growth) >= 2 and float(np.median(growth)) < 50.0
-                          and len(slowed_views) >= 2)
-    # A part that stopped under a nest of strands (spaghetti) reads no missing material: the pile fills its
-    # outline. But its newest band, in the part's colours, is then a mesh of strands over the bed or the bed
-    # itself: less than half covered by the part's material, in a view whose band read solid before (a face
-    # in the bed's colour reads bare at every check) and that saw no rise or could not measure one. Not where a
-    # top surface closes (a smooth top skin may look like the bed).
-    band_coverage_before = band_coverage_before or {}
-    bare_band = [r for r in usable.values()
-                 if (r.growth_pct is None or r.growth_pct < settings.min_growth_pct)
-                 and r.band_part_coverage is not None and r.band_part_coverage < NEST_MAX_COVERAGE
-                 and band_coverage_before.get(r.camera, 0.0) >= SOLID_MIN_COVERAGE]
-    stalled = stalled or (not top_closing and bool(growth) and float(np.median(growth)) < settings.min_growth_pct
-                          and bool(bare_band))
+    stalled, bare_band = stall_rules({cam: r.growth_pct for cam, r in measured.items()})
+    growth_since = "since the previous check"
+    # Where one check's rise is too small for any reading in a view (2-3 px: a part seen small, checks a few
+    # layers apart), its reading over more checks (``ShapeResult.span_growth_pct``, as fine, but from an older
+    # look) stands in for the same rules: a stall persists, so it is read, once the span lies after the stop.
+    # (in addition to the one-check readings, never instead: a span reaching back before a stop reads part of
+    # the rise, where a one-check reading already reads none)
+    spanned = {cam: r.span_growth_pct for cam, r in usable.items()
+               if r.growth_pct is None and r.span_growth_pct is not None and r.span_growth_pct >= -15.0}
+    if spanned and not stalled:
+        with_span = {**{cam: r.growth_pct for cam, r in measured.items()}, **spanned}
+        stalled, bare_band = stall_rules(with_span)
+        if stalled:
+            growth = list(with_span.values())
+            growth_since = "over the last checks"
     # Where no camera resolves the rise (4-6 px per check: a part seen small, checks a few layers apart) the
     # coarse readings (``ShapeResult.coarse_growth_pct``, to the pixel, +-25 %) stand in, each from a view that
     # read the part rising (50 %) at its previous check (``rise_before``: a view that never sees the top rise, a
@@ -645,7 +670,7 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     shape_fail = bool(decisive) or len(failing) >= needed
     fail_reasons = [reason for r in (failing if shape_fail else []) for reason in r.reasons]
     if stalled:
-        fail_reasons.append(f"the part has not grown as expected since the previous check: "
+        fail_reasons.append(f"the part has not grown as expected {growth_since}: "
                             f"{float(np.median(growth)):.0f}% of the expected rise seen "
                             f"(median of {len(growth)} camera(s), limit {settings.min_growth_pct:g}%): "
                             f"runout, clog or a stopped print?")
@@ -754,6 +779,9 @@ class CameraState:
     #: needs the previous check's)
     last_observed: np.ndarray | None = None
     last_observed_z: float | None = None
+    #: (z, observed mask) of its usable checks before the last one, newest first (at most
+    #: GROWTH_SPAN_CHECKS - 1): the growth test's older looks, where one check's rise is too small to read
+    older_observed: list = field(default_factory=list)
     #: the growth it read at its last usable check (None: it could not measure one)
     last_growth: float | None = None
     #: its extra material at the previous check (None: not usable there)
@@ -785,6 +813,13 @@ class CameraState:
     #: alignment chose a shift further than OUTLINE_DISAGREES_PX from it (None: they agreed, or no look yet):
     #: a first look's tie-break the outline contradicts (CheckRunner._second_look)
     first_look_outline: tuple[int, int] | None = None
+
+    def saw(self, mask: np.ndarray | None, z: float) -> None:
+        """Remember ``mask`` as the camera's look at ``z`` (its latest usable check)."""
+        if self.last_observed is not None and self.last_observed_z is not None and self.last_observed_z != z:
+            self.older_observed = [(self.last_observed_z, self.last_observed),
+                                   *self.older_observed][:GROWTH_SPAN_CHECKS - 1]
+        self.last_observed, self.last_observed_z = mask, z
 
 
 #: A first look's chosen shift and its upper-outline match disagree beyond this many pixels (either axis)
@@ -880,6 +915,9 @@ class CheckRunner:
                 band_coverage_wanted=((state.band_coverage or 0.0) < SOLID_MIN_COVERAGE
                                       or settings.min_growth_pct >= STALL_READ_BELOW_GROWTH_PCT),
                 foreign_before=state.last_foreign,
+                # (where one check's rise is too small to read, the growth test reads it against an older look)
+                older_looks=[(mask, self.plan.view(name, zz).silhouette) for zz, mask in state.older_observed
+                             if self.previous_z is not None and zz < self.previous_z],
             )
             result = check_shape(**shape_args, candidates=state.shift_candidates, track_candidates=True)
             result = not_decisive_where_calibrated(result, shape_args)
@@ -890,7 +928,7 @@ class CheckRunner:
                 state.first_look_outline = result.outline_best_candidate
             errors[name] = shape[name].error_pct if result.usable else None
             if result.usable:
-                state.last_observed, state.last_observed_z = result.observed_mask, z
+                state.saw(result.observed_mask, z)
                 state.last_growth = result.growth_pct
             if result.palette is not None and result.usable and result.passed:
                 state.palette = result.palette
@@ -1060,7 +1098,7 @@ class CheckRunner:
                 why = f"while {', '.join(vouching)} see it in place"
             elif pending is None:
                 state.pending_offset, state.offset_abstained = probe.shift_px, True
-                state.last_observed, state.last_observed_z = probe.observed_mask, z
+                state.saw(probe.observed_mask, z)
                 shape[name] = replace(result, usable=False, passed=True, decisive=False, reasons=[
                     f"{where}, and no other camera sees the part in place: not judged until the next check tells "
                     f"a calibration error (the part grows there) from a part knocked off (it does not)"])
@@ -1085,7 +1123,7 @@ class CheckRunner:
         probe.reasons.append(reason)
         shape[name] = probe
         errors[name] = probe.error_pct
-        state.last_observed, state.last_observed_z = probe.observed_mask, z
+        state.saw(probe.observed_mask, z)
         state.previous_mask, state.last_growth = probe.observed_mask, probe.growth_pct
         if probe.palette is not None:
             state.palette = probe.palette

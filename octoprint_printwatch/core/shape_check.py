@@ -33,7 +33,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from typing import Any, Callable, Mapping
+from typing import Any, Callable, Mapping, Sequence
 
 import cv2
 import numpy as np
@@ -178,6 +178,15 @@ class ShapeResult:
     #: ``min_rise`` (4 px) allowed, read to the pixel, so about +-25 %; None where ``growth_pct`` is measured.
     #: pipeline.decide's stall rules fall back on it only when no camera measured ``growth_pct``
     coarse_growth_pct: float | None = None
+    #: the growth test over more than one check, where one check's rise is too small for ``growth_pct`` and
+    #: ``coarse_growth_pct`` (2-3 px: a part seen small, checks a few layers apart): the rise since an older look
+    #: of this camera (check_shape's ``older_looks``), read as finely as ``growth_pct``; None where either of those
+    #: is measured. pipeline.decide's stall rules read it where ``growth_pct`` is None (a stall persists; a span
+    #: reaching back before the stop reads part of the rise, so it reads the stall later)
+    span_growth_pct: float | None = None
+    #: how many checks back the growth reading was measured against: 1 the previous check (``growth_pct``,
+    #: ``coarse_growth_pct``), more for ``span_growth_pct``; None without a reading
+    growth_span: int | None = None
     # pieces the overlay is drawn from (kept so the picture costs nothing unless asked for)
     _frame: np.ndarray | None = field(default=None, repr=False)
     _expected: np.ndarray | None = field(default=None, repr=False)
@@ -205,6 +214,8 @@ class ShapeResult:
             "band_missing_pct": None if self.band_missing_pct is None else round(self.band_missing_pct, 2),
             "growth_pct": None if self.growth_pct is None else round(self.growth_pct, 1),
             "coarse_growth_pct": None if self.coarse_growth_pct is None else round(self.coarse_growth_pct, 1),
+            "span_growth_pct": None if self.span_growth_pct is None else round(self.span_growth_pct, 1),
+            "growth_span": self.growth_span,
             "shift_px": list(self.shift_px),
             "band_shift": None if self.band_shift is None else self.band_shift.figures(),
             **(self.new_outside.figures() if self.new_outside is not None
@@ -775,6 +786,10 @@ def _profile_cost(observed: np.ndarray, expected: np.ndarray, dxs: np.ndarray, d
     return np.where(counted > 0, total / np.maximum(counted, 1), cap).astype(np.float32)
 
 
+#: The growth test reads the rise over at most this many checks (ShapeResult.growth_span): where one check's
+#: rise is too small to read, against an older look of the camera (check_shape's ``older_looks``)
+GROWTH_SPAN_CHECKS = 3
+
 #: The coarse growth reading (ShapeResult.coarse_growth_pct) needs a median expected rise of this many ``min_rise``
 COARSE_RISE_FACTOR = 1.0
 
@@ -1103,6 +1118,7 @@ def check_shape(
     track_candidates: bool = False,
     band_coverage_wanted: bool = True,
     foreign_before: np.ndarray | None = None,
+    older_looks: Sequence[tuple[np.ndarray, np.ndarray]] = (),
 ) -> ShapeResult:
     """Shape check of one camera (module docstring). Images (h, w, 3) uint8 BGR of the camera's size.
 
@@ -1116,6 +1132,10 @@ def check_shape(
     part did not visibly grow: the caller has seen this camera's band solid, and only a stalled part's is read.
     ``foreign_before`` ((h, w) bool, full frame): the objects this camera found reaching in from above the
     search box at its previous check (:attr:`ShapeResult.foreign_mask`; the parked hotend).
+    ``older_looks``: (observed mask, the model's silhouette then), both (h, w) bool, of this camera's usable
+    checks before the previous one, newest first: where the model's top rises too little between two checks
+    for any growth reading (2-3 px: a part seen small, checks a few layers apart), the rise is read against the
+    newest of them the model's top rose enough since (:data:`GROWTH_SPAN_CHECKS`; ``growth_span``).
     """
     h, w = regions.silhouette.shape
     if frame.shape[:2] != (h, w):
@@ -1263,6 +1283,22 @@ def check_shape(
             # coarsely (a pixel of edge wobble is 20-25 %); decide uses it only where no camera reads finer
             coarse_growth_pct = profile_growth(*growth_args, min_rise=max(4.0, 2.0 * tol),
                                                median_factor=COARSE_RISE_FACTOR, columns=edges)
+    growth_span = 1 if (growth_pct is not None or coarse_growth_pct is not None) else None
+    span_growth_pct = None
+    if rise_readable and growth_span is None and older_looks:
+        # The model's top rises too little between two checks for any reading (2-3 px): read the rise against
+        # an older look of this camera instead, the newest one the top rose enough since to read it finely
+        # (the same pixel precision as a one-check reading; a stall persists, so it is read all the same, only
+        # once the whole span lies after the stop)
+        for span, (older, older_silhouette) in enumerate(older_looks[:GROWTH_SPAN_CHECKS - 1], start=2):
+            if older is None or older.shape != (h, w) or older_silhouette is None:
+                continue
+            older_a = shift_mask(older_silhouette[crop].astype(bool), dx, dy)
+            span_growth_pct = profile_growth(observed & grown_a, older[crop] & dilate(older_a, tol), expected_a,
+                                             older_a, min_rise=max(4.0, 2.0 * tol), columns=edges)
+            if span_growth_pct is not None:
+                growth_span = span
+                break
 
     n = max(comparison.expected_pixels, 1)
     missing_pct = 100.0 * int(comparison.missing.sum()) / n
@@ -1373,6 +1409,7 @@ def check_shape(
         new_outside=new_outside, moved_px=moved_px, first_look=last_observed is None,
         background_missing_pct=background_missing_pct, background_band_missing_pct=background_band_missing_pct,
         band_part_coverage=band_coverage, coarse_growth_pct=coarse_growth_pct, foreign_mask=foreign_full,
+        growth_span=growth_span, span_growth_pct=span_growth_pct,
     )
     if keep_pictures:
         full = np.zeros((h, w), bool)
