@@ -15,7 +15,7 @@ also a part standing taller or lower: that explanation is one height error in ev
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Mapping, Sequence
+from typing import Callable, Mapping, Sequence
 
 import cv2
 import numpy as np
@@ -93,6 +93,8 @@ HEIGHT_NULL_TOLERANCE_PX = 1
 #: on, which "2.7 mm shorter" explained as well as the shift, 663 against 665; the checks before read it in place).
 HEIGHT_NULL_REFUTED_PX = 60.0
 HEIGHT_NULL_REFUTED_CHECKS = 2
+#: (camera name, (m,) heights mm) -> (m,) bool: the heights that camera's earlier checks refute (_refuted_heights)
+RefutedHeights = Callable[[str, np.ndarray], np.ndarray]
 
 
 @dataclass
@@ -407,7 +409,7 @@ def layer_shift_at(views: Mapping[str, BandShift], shift_mm, within_mm: float = 
     return _pooled(views, centre + offsets, vertical=vertical)
 
 
-def _refuted_heights(earlier: Sequence[Mapping[str, BandShift]]):
+def _refuted_heights(earlier: Sequence[Mapping[str, BandShift]]) -> RefutedHeights | None:
     """A function of a camera's name and (m,) heights (mm; its top moves by height x its image y px per mm of height)
     giving (m,) bool: the heights HEIGHT_NULL_REFUTED_CHECKS of that camera's readings at the ``earlier`` checks read
     clearly wrong (HEIGHT_NULL_REFUTED_PX); None when no camera has that many readings."""
@@ -443,7 +445,7 @@ def _tolerant(scores: np.ndarray) -> np.ndarray:
 
 
 def _pooled(views: Mapping[str, BandShift], grid: np.ndarray, vertical: bool = True,
-            refuted=None) -> LayerShift | None:
+            refuted: RefutedHeights | None = None) -> LayerShift | None:
     """The best of the (n, 2) bed shifts ``grid`` (mm) by the pooled score (estimate_layer_shift); a camera
     counts the shift's vertical image move beyond its tolerance too unless ``vertical`` is False."""
     total = np.zeros((5, len(grid)), np.float64)
@@ -512,7 +514,8 @@ def _pooled(views: Mapping[str, BandShift], grid: np.ndarray, vertical: bool = T
 
 def _side_apart(per_camera: Mapping[str, np.ndarray], best: int,
                 heights: Mapping[str, tuple[np.ndarray, np.ndarray, float]],
-                directions: Mapping[str, float], refuted=None) -> tuple[float, float, float, float] | None:
+                directions: Mapping[str, float],
+                refuted: RefutedHeights | None = None) -> tuple[float, float, float, float] | None:
     """(support, against, moved, null) of the side (cameras looking from directions within VIEWPOINT_APART_DEG,
     modulo 2 pi, as ``LayerShift.sides``) whose cameras the pooled null (the one height error that fits all views
     best at shift ``best``) explains worst relative to the shift, or None. ``per_camera``: each camera's weighted
@@ -544,7 +547,8 @@ def _side_apart(per_camera: Mapping[str, np.ndarray], best: int,
     return found[1]
 
 
-def _height_null(cameras: Mapping[str, tuple[np.ndarray, np.ndarray, float]], parts: bool = False, refuted=None):
+def _height_null(cameras: Mapping[str, tuple[np.ndarray, np.ndarray, float]], parts: bool = False,
+                 refuted: RefutedHeights | None = None):
     """(n,) the pooled null of :func:`_pooled`'s n shifts: the best score of one height error (the part standing
     taller or lower by the same millimetres in every view) summed over the cameras, each weighted as in the
     pooling. ``cameras``: {name: ((n,) weight, (2 r + 1,) the band's top moved by dy = index - r scored, image y

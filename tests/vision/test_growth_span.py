@@ -80,4 +80,5 @@ def test_a_camera_remembers_its_older_looks():
     assert state.last_observed == "mask8.0" and state.last_observed_z == 8.0
     assert [z for z, _ in state.older_observed] == [6.0, 4.0][:GROWTH_SPAN_CHECKS - 1]
     state.saw("again", 8.0)                           # a second look at the same check replaces it
-    assert state.last_observed == "again" and [z for z, _ in state.older_observed] == [6.0, 4.0][:GROWTH_SPAN_CHECKS - 1]
+    assert state.last_observed == "again"
+    assert [z for z, _ in state.older_observed] == [6.0, 4.0][:GROWTH_SPAN_CHECKS - 1]
