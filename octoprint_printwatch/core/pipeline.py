@@ -27,8 +27,8 @@ from .layer_shift import (BandShift, LayerShift, confirms_layer_shift, describe_
                           with_history)
 from .shape_check import (GROWTH_SPAN_CHECKS, ExpectedRegions, ShapeResult, check_shape,
                           not_decisive_where_calibrated)
-from .nest import NEST_MAX_COVERAGE, SOLID_MIN_COVERAGE, STALL_READ_BELOW_GROWTH_PCT
-from .tangle import loose_material
+from .nest import NEST_MAX_COVERAGE, SOLID_MIN_COVERAGE, STALL_READ_BELOW_GROWTH_PCT, textured_views
+from .tangle import SLOWED_RISE_PCT, loose_material
 
 VERDICTS = ("ok", "fail", "unknown")
 
@@ -466,7 +466,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
            band_coverage_before: Mapping[str, float] | None = None,
            rise_before: Mapping[str, float | None] | None = None,
            missing_before: Mapping[str, float] | None = None,
-           missing_at_rise: Mapping[str, float] | None = None) -> tuple[str, list[str]]:
+           missing_at_rise: Mapping[str, float] | None = None,
+           band_texture_before: Mapping[str, float] | None = None) -> tuple[str, list[str]]:
     """The combined decision rule -> (verdict, reasons).
 
     * A camera counts only when it gave a frame and its background still matches the bed
@@ -515,6 +516,11 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       or the only usable camera's own reading, where too few views read it finely each view's coarse reading
       standing in: :func:`rise_for_loose_material`; not where a top surface closes)
       (:func:`core.tangle.loose_material`);
+    * or when, with the part's outline rising under half the expected height (the same figure, not where a top
+      surface closes), a view's newest band looks 1.5 times as textured as at its previous check
+      (``ShapeResult.band_texture``; ``band_texture_before``: each camera's reading at its previous check, not a
+      first look; :func:`core.nest.textured_views`): strands piled over a part that slowed, or the bed where it
+      should be;
     * unknown when no camera and no pair gave usable evidence; ok otherwise.
     """
     if layer_shift is None:
@@ -698,6 +704,16 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     if tangle is not None:
         fail_reasons.append(tangle)
         shape_fail = True
+    # A part that slowed while a view's newest band turned textured (``band_texture_before``: each camera's
+    # band texture at its previous check): strands piled over it fill its outline and lift it a little, but each
+    # strand brings its own highlight and shadow where the printed face was smooth (the bed seen where the part
+    # should be is textured too); the slow rise is the second witness, as for one view of loose material
+    textured = textured_views({cam: r.band_texture for cam, r in usable.items()}, band_texture_before or {})
+    if textured and rise_pct is not None and rise_pct < SLOWED_RISE_PCT:
+        fail_reasons.extend(f"{cam}: the newest layers look {ratio:.1f} times as textured as at the previous check "
+                            f"while the part rose {rise_pct:.0f}% of the expected height: strands piled over the "
+                            f"part, or the bed where it should be?" for cam, ratio in sorted(textured.items()))
+        shape_fail = True
     if shape_fail or size_fail or stalled:
         return "fail", fail_reasons + size_fail + reasons
     return "ok", reasons
@@ -799,6 +815,9 @@ class CameraState:
     rise_quiet: int = 0
     #: the highest share of its newest band covered by the part's material so far (core/nest.py)
     band_coverage: float | None = None
+    #: its newest band's texture at its previous check (ShapeResult.band_texture; None: not usable there, its
+    #: first look, whose band is the whole part, or no band figures): decide's textured-band rule
+    last_band_texture: float | None = None
     #: (dx, dy) px: a calibration error larger than the stated one, learned once (_learn_calibration_offsets);
     #: its alignment bound is widened to reach it
     calibration_offset: tuple[int, int] | None = None
@@ -880,6 +899,8 @@ class CheckRunner:
                           if state.last_missing is not None}
         missing_at_rise = {name: state.rise_missing for name, state in self.cameras.items()
                            if state.rise_missing is not None}
+        texture_before = {name: state.last_band_texture for name, state in self.cameras.items()
+                          if state.last_band_texture is not None}
         for name, state in self.cameras.items():
             frame = frames.get(name)
             background = self.backgrounds.get(name)
@@ -972,14 +993,16 @@ class CheckRunner:
                                   layer_shift=layer_shift, top_closing=top_closing, pairs=self.plan.pairs,
                                   extra_before=extra_before, band_coverage_before=coverage_before,
                                   rise_before=rise_before, missing_before=missing_before,
-                                  missing_at_rise=missing_at_rise)
+                                  missing_at_rise=missing_at_rise, band_texture_before=texture_before)
         verdict, reasons = decide(**self.last_decision)
         for name, state in self.cameras.items():
             r = shape.get(name)
             if r is None or not r.usable:
                 state.last_extra = state.last_rise = state.last_missing = state.last_foreign = None
                 state.rise_missing, state.rise_quiet = None, 0
+                state.last_band_texture = None
                 continue
+            state.last_band_texture = None if r.first_look else r.band_texture
             state.last_extra, state.last_missing, state.last_foreign = r.extra_pct, r.missing_pct, r.foreign_mask
             state.last_rise = r.growth_pct if r.growth_pct is not None else r.coarse_growth_pct
             state.rise_missing, state.rise_quiet = missing_since_rise(

@@ -41,7 +41,7 @@ import numpy as np
 from .camera import Camera
 from .layer_shift import BandShift, band_shift, stretched
 from .tangle import NewMaterial, new_material
-from .nest import STALL_READ_BELOW_GROWTH_PCT, part_coverage
+from .nest import STALL_READ_BELOW_GROWTH_PCT, part_coverage, region_texture
 from .shadows import shade_of_clipped_bed, shadow_left
 from .masks import (around, bounding_box, dilate, disk, erode, outline_zone,  # noqa: F401  (re-exported)
                     reaching_in_from_above, shift_mask, crossing_the_box, mirror_match, MIRROR_MATCH_SHARE,
@@ -122,6 +122,7 @@ class Evidence:
     gains: np.ndarray
     changed_bed_fraction: float
     background_norm: np.ndarray | None = None   # (h, w, 3) float32, the background at the frame's exposure
+    frame_gradient: np.ndarray | None = None   # (h, w) float32, the frame's luma gradient (:func:`_gradient`)
 
 
 @dataclass
@@ -187,6 +188,10 @@ class ShapeResult:
     #: how many checks back the growth reading was measured against: 1 the previous check (``growth_pct``,
     #: ``coarse_growth_pct``), more for ``span_growth_pct``; None without a reading
     growth_span: int | None = None
+    #: mean luma gradient (grey levels, :func:`_gradient`) of the frame over the newest band's core (core/nest.py:
+    #: strands piled over the part are textured where its printed faces are smooth); None where the band
+    #: figures are not measured
+    band_texture: float | None = None
     # pieces the overlay is drawn from (kept so the picture costs nothing unless asked for)
     _frame: np.ndarray | None = field(default=None, repr=False)
     _expected: np.ndarray | None = field(default=None, repr=False)
@@ -216,6 +221,7 @@ class ShapeResult:
             "coarse_growth_pct": None if self.coarse_growth_pct is None else round(self.coarse_growth_pct, 1),
             "span_growth_pct": None if self.span_growth_pct is None else round(self.span_growth_pct, 1),
             "growth_span": self.growth_span,
+            "band_texture": None if self.band_texture is None else round(self.band_texture, 2),
             "shift_px": list(self.shift_px),
             "band_shift": None if self.band_shift is None else self.band_shift.figures(),
             **(self.new_outside.figures() if self.new_outside is not None
@@ -392,7 +398,7 @@ def material_evidence(
                   | (dark.ravel()[sample] > _CHANGED_LEVELS))
     changed = float(np.mean(changed_px)) if sample.size else 0.0
     return Evidence(material=material, strong=strong_material, bed=bed, score=score, noise=noise, gains=gains,
-                    background_norm=bg,
+                    background_norm=bg, frame_gradient=grad_f,
                     changed_bed_fraction=changed)
 
 
@@ -1305,12 +1311,13 @@ def check_shape(
     extra_pct = 100.0 * int(comparison.extra.sum()) / n
     error_pct = missing_pct + extra_pct
     raw_error_pct = 100.0 * comparison.raw_diff_pixels / n
-    band_error = band_missing = shifted_band = band_coverage = None
+    band_error = band_missing = shifted_band = band_coverage = band_texture = None
     if comparison.band_core_pixels >= band_min_pixels:
         band_missing = 100.0 * comparison.band_missing / comparison.band_pixels
         band_error = 100.0 * (comparison.band_missing + comparison.band_extra) / comparison.band_pixels
         if band_coverage_wanted or growth_pct is None or growth_pct < STALL_READ_BELOW_GROWTH_PCT:
             band_coverage = part_coverage(frame[crop], evidence.background_norm, band_a & core, palette_used)
+        band_texture = region_texture(evidence.frame_gradient, band_a & core)
         if regions.px_per_mm > 0:
             reach = int(np.ceil(8.0 * regions.px_per_mm))
             before_band = before_a if before_a is not None else expected_a & ~band_a
@@ -1409,7 +1416,7 @@ def check_shape(
         new_outside=new_outside, moved_px=moved_px, first_look=last_observed is None,
         background_missing_pct=background_missing_pct, background_band_missing_pct=background_band_missing_pct,
         band_part_coverage=band_coverage, coarse_growth_pct=coarse_growth_pct, foreign_mask=foreign_full,
-        growth_span=growth_span, span_growth_pct=span_growth_pct,
+        growth_span=growth_span, span_growth_pct=span_growth_pct, band_texture=band_texture,
     )
     if keep_pictures:
         full = np.zeros((h, w), bool)
