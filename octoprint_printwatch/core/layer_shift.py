@@ -245,6 +245,10 @@ def band_shift(observed: np.ndarray, bed: np.ndarray, before: np.ndarray, band: 
     """
     if not band.any() or reach_x < 1 or min_dx > reach_x:
         return None
+    window = _window(band, reach_x, reach_y, tolerance)
+    observed, bed, before, band = observed[window], bed[window], before[window], band[window]
+    if undecided is not None:
+        undecided = undecided[window]
     evidence = _Evidence.of(observed, bed, before | band, tolerance)
     null_dy, null_score, null_scores = _vertical_null(evidence, before, band, reach_y)
     maps = _band_shift_maps(evidence, before, band, reach_x, reach_y, undecided, tolerance)
@@ -258,6 +262,17 @@ def band_shift(observed: np.ndarray, bed: np.ndarray, before: np.ndarray, band: 
                      maps=maps, bed_to_image=None if bed_to_image is None else np.asarray(bed_to_image, float),
                      null_scores=null_scores,
                      height_to_image=None if height_to_image is None else np.asarray(height_to_image, float))
+
+
+def _window(band: np.ndarray, reach_x: int, reach_y: int, tolerance: float) -> tuple[slice, slice]:
+    """The part of the image :func:`band_shift` reads: the band's box grown by the reach and the tolerance
+    (every count, the undecided rim), and by what the tolerance ring there reads around it (masks.dilate /
+    erode: tolerance / 0.955 + 1 px), so every count is the whole image's."""
+    y0, y1, x0, x1 = bounding_box(band)
+    reads = int(np.ceil(tolerance)) + int(np.ceil(tolerance / 0.955)) + 3
+    h, w = band.shape
+    return (slice(max(0, y0 - reach_y - reads), min(h, y1 + reach_y + reads)),
+            slice(max(0, x0 - reach_x - reads), min(w, x1 + reach_x + reads)))
 
 
 @dataclass

@@ -54,7 +54,8 @@ class PlannedView:
 
     def _unpack(self, packed: np.ndarray) -> np.ndarray:
         """(h, w) bool"""
-        return np.unpackbits(packed, count=self.shape[0] * self.shape[1]).reshape(self.shape).astype(bool)
+        # (the unpacked bits are 0 or 1: read as bool without a copy)
+        return np.unpackbits(packed, count=self.shape[0] * self.shape[1]).reshape(self.shape).view(bool)
 
     @property
     def silhouette(self) -> np.ndarray:
@@ -91,6 +92,8 @@ class JobPlan:
     prepare_seconds: float = 0.0
     notes: list[str] = field(default_factory=list)
     cache_dir: Path | None = None
+    #: {(camera, margin mm): bed_marks_zone}: the same at every check (read-only arrays)
+    _bed_marks: dict = field(default_factory=dict, repr=False, compare=False)
 
     def view(self, camera: str, z: float, previous_z: float | None = None):
         """The expected view of ``camera`` at ``z``; rendered now (and kept) when not planned."""
@@ -133,7 +136,12 @@ class JobPlan:
         silhouette = np.asarray(view.silhouette, bool)
         band = np.asarray(view.new_band, bool)
         search = bed_box_mask(cam, self.footprint, settings.search_margin_mm, 0.0, z + settings.search_above_top_mm)
-        dont_care, reflection = bed_marks_mask(cam, self.footprint, z, settings.bed_marks_margin_mm)
+        dont_care = self._bed_marks.get((camera, settings.bed_marks_margin_mm))
+        if dont_care is None:
+            dont_care = bed_marks_zone(cam, self.footprint, settings.bed_marks_margin_mm)
+            dont_care.flags.writeable = False
+            self._bed_marks[(camera, settings.bed_marks_margin_mm)] = dont_care
+        reflection = reflection_zone(cam, self.footprint, z)
         before = None
         if previous_z is not None and previous_z < z:
             before = np.asarray(self.view(camera, previous_z).silhouette, bool)
@@ -321,12 +329,20 @@ def bed_marks_mask(camera: Camera, footprint: np.ndarray, z: float, margin: floa
     box mirrored below the bed (z -> -z). The shape check ignores extra material only when it lies
     wholly in this zone, so a tall thing standing in it (a moved part, spaghetti) still counts.
     """
+    return bed_marks_zone(camera, footprint, margin), reflection_zone(camera, footprint, z)
+
+
+def bed_marks_zone(camera: Camera, footprint: np.ndarray, margin: float) -> np.ndarray:
+    """(h, w) bool: the bed ring of :func:`bed_marks_mask` (the same at every height)."""
     grown = _densify(_offset_polygon(footprint, margin))
-    flat = _fill_projection(camera, np.column_stack([grown, np.zeros(len(grown))]))
+    return _fill_projection(camera, np.column_stack([grown, np.zeros(len(grown))]))
+
+
+def reflection_zone(camera: Camera, footprint: np.ndarray, z: float) -> np.ndarray:
+    """(h, w) bool: the reflection zone of :func:`bed_marks_mask` at height ``z``."""
     tight = _densify(_offset_polygon(footprint, 0.5))
-    mirror = _fill_projection(camera, np.vstack([np.column_stack([tight, np.full(len(tight), -h)])
-                                                 for h in (0.0, max(z, 0.2))]))
-    return flat, mirror
+    return _fill_projection(camera, np.vstack([np.column_stack([tight, np.full(len(tight), -h)])
+                                               for h in (0.0, max(z, 0.2))]))
 
 
 # ----------------------------------------------------------------- results

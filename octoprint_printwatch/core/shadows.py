@@ -202,6 +202,8 @@ def shade_of_clipped_bed(frame: np.ndarray, background: np.ndarray, clipped: np.
     value. ``frame`` (h, w, 3) float32 or uint8, ``background`` (h, w, 3) float32, the background at the frame's
     exposure."""
     out = np.zeros(where.shape, bool)
+    if not clipped.any():   # (most beds: no channel clipped anywhere)
+        return out
     # (per pixel of ``where`` only: reducing the whole (h, w, 3) mask costs more than the rest)
     index = np.flatnonzero(where)
     c = clipped.reshape(-1, 3)[index]

@@ -31,7 +31,7 @@ import cv2
 import numpy as np
 
 from .layer_shift import count_viewpoints
-from .masks import dilate, disk, outline_zone, reaching_in_from_above
+from .masks import components, dilate, disk, outline_zone, reaching_in_from_above
 
 #: New material closer than this to the expected silhouette (mm at the part) is not counted: the residual
 #: calibration error (1 %, 0.5 deg, 1 mm) leaves a part's edge up to about a millimetre outside its outline.
@@ -148,7 +148,7 @@ def new_material(
         foreign = reaching_in_from_above(outside if linked is None else outside | (linked & ~grown), search, expected)
     new &= ~foreign
     new &= ~reaching_in_from_above(outside, search, expected)
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(new.astype(np.uint8), connectivity=8)
+    count, labels, area = components(new)
     keep = np.ones(count, bool)
     keep[0] = False
     ys, xs = np.nonzero(new)
@@ -160,7 +160,7 @@ def new_material(
     at_foot = np.zeros(count, bool)
     if marks is not None and count > 1:
         inside = np.bincount(ids, weights=marks[ys, xs], minlength=count)
-        at_foot = keep & (inside >= 0.8 * np.maximum(stats[:, cv2.CC_STAT_AREA], 1))
+        at_foot = keep & (inside >= 0.8 * np.maximum(area, 1))
         keep &= ~at_foot
     counted = keep[labels] & far
     pixels = int(counted.sum())

@@ -253,3 +253,214 @@ def test_new_material_with_compare_masks_objects_from_above_is_new_material_alon
                 (fast.area_mm2, fast.pixels, fast.blobs, fast.at_foot_mm2), trial
             assert np.array_equal(plain.mask, fast.mask), trial
     assert counted > 10
+
+
+# ------------------------------------------------ fourteenth session (helper E14)
+def test_scaled_background_is_np_multiply():
+    """_scaled (a per-channel lookup table) == np.multiply(image, gains, dtype=float32), bit for bit, on uint8
+    crops (views too) with float32 or float64 gains; other images are multiplied as before."""
+    from octoprint_printwatch.core.shape_check import _scaled
+    rng = np.random.default_rng(21)
+    for trial in range(60):
+        image = rng.integers(0, 256, (int(rng.integers(5, 90)), int(rng.integers(5, 90)), 3)).astype(np.uint8)
+        if trial % 3 == 0:
+            image = image[2:-1, 3:]
+        gains = rng.uniform(0.2, 5.0, 3).astype(np.float32 if trial % 2 else np.float64)
+        plain = np.multiply(image, gains, dtype=np.float32)
+        fast = _scaled(image, gains)
+        assert fast.dtype == plain.dtype and fast.shape == plain.shape
+        assert fast.tobytes() == plain.tobytes(), trial
+    floats = rng.uniform(0, 255, (20, 30, 3)).astype(np.float32)
+    gains = np.array([0.9, 1.1, 1.3], np.float32)
+    assert _scaled(floats, gains).tobytes() == np.multiply(floats, gains, dtype=np.float32).tobytes()
+
+
+def _blob_scene(rng):
+    h, w = (int(v) for v in rng.integers(20, 140, size=2))
+    mask = cv2.dilate((rng.random((h, w)) < rng.uniform(0.002, 0.05)).astype(np.uint8),
+                      np.ones((int(rng.integers(1, 7)), int(rng.integers(1, 9))), np.uint8)).astype(bool)
+    return mask | (rng.random((h, w)) < 0.01)
+
+
+def test_components_and_lowest_rows_are_connected_components_with_stats():
+    """masks.components: the labels and areas cv2.connectedComponentsWithStats gives; lowest_rows: its
+    top + height - 1 for the labels asked, -1 for the others."""
+    from octoprint_printwatch.core.masks import components, lowest_rows
+    rng = np.random.default_rng(22)
+    for trial in range(200):
+        mask = _blob_scene(rng)
+        count, labels, area = components(mask)
+        count_s, labels_s, stats, _ = cv2.connectedComponentsWithStats(mask.astype(np.uint8), connectivity=8)
+        assert count == count_s and np.array_equal(labels, labels_s), trial
+        assert np.array_equal(area, stats[:, cv2.CC_STAT_AREA]), trial
+        asked = rng.random(count) < 0.5
+        lowest = lowest_rows(labels, asked)
+        want = np.where(asked, stats[:, cv2.CC_STAT_TOP] + stats[:, cv2.CC_STAT_HEIGHT] - 1, -1)
+        assert np.array_equal(lowest, want), trial
+
+
+def test_objects_from_above_are_those_read_with_connected_component_statistics(monkeypatch):
+    """reaching_in_from_above, compare_masks and new_material give the same masks and figures with the blobs'
+    areas and lowest rows read from cv2.connectedComponentsWithStats (the form before masks.components)."""
+    from octoprint_printwatch.core import masks, shape_check, tangle
+
+    def components_with_stats(mask):
+        count, labels, stats, _ = cv2.connectedComponentsWithStats(mask.astype(np.uint8), connectivity=8)
+        return count, labels, stats[:, cv2.CC_STAT_AREA]
+
+    def lowest_of_every_blob(labels, asked):
+        count = len(asked)
+        _, _, stats, _ = cv2.connectedComponentsWithStats((labels > 0).astype(np.uint8), connectivity=8)
+        lowest = np.full(count, -1, np.int64)
+        for label in range(1, count):   # (every blob, asked or not: the rule reads only the asked ones)
+            rows = np.flatnonzero((labels == label).any(axis=1))
+            lowest[label] = rows[-1] if rows.size else -1
+        return lowest
+
+    rng = np.random.default_rng(23)
+    results = {}
+    for form in ("fast", "plain"):
+        if form == "plain":
+            for module in (masks, shape_check, tangle):
+                monkeypatch.setattr(module, "components", components_with_stats, raising=False)
+            monkeypatch.setattr(masks, "lowest_rows", lowest_of_every_blob)
+        rng = np.random.default_rng(23)
+        out = []
+        for trial in range(120):
+            h, w = (int(v) for v in rng.integers(80, 180, size=2))
+            expected = np.zeros((h, w), bool)
+            ey0, ex0 = int(rng.integers(h // 3, h // 2)), int(rng.integers(w // 4, w // 2))
+            expected[ey0:ey0 + h // 3, ex0:ex0 + w // 4] = True
+            search = np.zeros((h, w), bool)
+            search[int(rng.integers(5, ey0)):, 3:-3] = True
+            observed = expected & (rng.random((h, w)) < 0.97)
+            for _ in range(int(rng.integers(1, 9))):   # hanging objects, strands, blobs
+                y, x = int(rng.integers(0, h - 3)), int(rng.integers(0, w - 3))
+                observed[y:y + int(rng.integers(2, 60)), x:x + int(rng.integers(2, 30))] = True
+            linked = observed | (rng.random((h, w)) < 0.05)
+            before = np.roll(observed & ~expected, int(rng.integers(-3, 4)), axis=0) if trial % 2 else None
+            tol = float(rng.choice([1.0, 2.0, 3.0]))
+            foreign = masks.reaching_in_from_above(linked & ~expected, search, expected, material=observed & ~expected,
+                                                   before=before)
+            comparison = compare_masks(observed, ~linked, expected, expected & (np.arange(h)[:, None] < ey0 + 5),
+                                       search, rng.random((h, w)) < 0.3, tol, band_reach=2 * tol,
+                                       top_tolerance=tol, linked=linked, foreign_before=before)
+            new = new_material(observed, expected | (rng.random((h, w)) < 0.01), expected, search, tol, 2.0,
+                               linked=linked, marks=rng.random((h, w)) < 0.2)
+            out.append((foreign, comparison.missing, comparison.extra, comparison.foreign,
+                        None if new is None else (new.pixels, new.blobs, new.at_foot_mm2, new.mask)))
+        results[form] = out
+    found = 0
+    for trial, (fast, plain) in enumerate(zip(results["fast"], results["plain"])):
+        found += bool(fast[0].any())
+        for a, b in zip(fast[:4], plain[:4]):
+            assert (a is None) == (b is None) and (a is None or np.array_equal(a, b)), trial
+        assert (fast[4] is None) == (plain[4] is None), trial
+        if fast[4] is not None:
+            assert fast[4][:3] == plain[4][:3] and np.array_equal(fast[4][3], plain[4][3]), trial
+    assert found > 20
+
+
+def test_clipped_bed_test_without_a_clipped_channel_finds_nothing():
+    """shade_of_clipped_bed returns at once when no channel is clipped anywhere: the answer it gave before."""
+    rng = np.random.default_rng(24)
+    frame = rng.uniform(0, 255, (40, 50, 3)).astype(np.float32)
+    background = rng.uniform(0, 255, (40, 50, 3)).astype(np.float32)
+    where = rng.random((40, 50)) < 0.5
+    assert not shadows.shade_of_clipped_bed(frame, background, np.zeros((40, 50, 3), bool), 10.0, where).any()
+    clipped = np.zeros((40, 50, 3), bool)
+    clipped[..., 2] = True
+    background[..., 2] = 255.0
+    frame = background * 0.6
+    assert shadows.shade_of_clipped_bed(frame, background, clipped, 10.0, where)[where].all()
+
+
+def test_edge_noise_is_read_only_where_a_column_fails_the_share_test():
+    """edge_in_the_frame with the bed sample: the columns of the share test alone plus those clear of the
+    noise; where the share test passes every column, the sample changes nothing (it is then not read)."""
+    from octoprint_printwatch.core.shape_check import edge_in_the_frame
+    rng = np.random.default_rng(25)
+    both_kinds = set()
+    for trial in range(150):
+        h, w = 90, 70
+        background = (rng.normal(100, 3, (h, w, 3))).clip(0, 255).astype(np.float32)
+        frame = (background + rng.normal(0, 3, (h, w, 3))).clip(0, 255).astype(np.uint8)
+        top = int(rng.integers(20, 60))
+        observed = np.zeros((h, w), bool)
+        observed[top:, 20:50] = True
+        frame[top:, 20:50] = rng.integers(0, 256, 3)
+        ghost = rng.integers(20, 50, 2)   # an edge the background frame holds
+        background[top:, ghost.min():ghost.max() + 1] += float(rng.uniform(0, 120))
+        sample = np.zeros((h, w), bool)
+        sample[:, :12] = True
+        alone = edge_in_the_frame(observed, frame, background, 2.0, None)
+        noise = edge_in_the_frame(observed, frame, background, 2.0, sample)
+        assert not (alone & ~noise).any(), trial
+        readable = edge_in_the_frame(observed, frame, frame.astype(np.float32) * 0 + 100.0, 2.0, None)
+        if alone[readable].all():
+            assert np.array_equal(alone, noise), trial
+        both_kinds.add(bool(alone[readable].all()))
+    assert both_kinds == {True, False}
+
+
+def test_bed_marks_zone_is_kept_per_camera_and_equals_bed_marks_mask():
+    """JobPlan.regions reads the bed ring (the same at every height) once per camera: the arrays it gives
+    are bed_marks_mask's, read-only."""
+    from types import SimpleNamespace
+    from octoprint_printwatch.core.camera import Camera
+    from octoprint_printwatch.core.pipeline import JobPlan, bed_marks_mask
+    from octoprint_printwatch.core.settings import DetectionSettings
+    cam = Camera.look_at("a", (100, -20, 60), (100, 100, 4), width=160, height=120, hfov_deg=40)
+    footprint = np.array([[90.0, 90.0], [110.0, 90.0], [110.0, 110.0], [90.0, 110.0]])
+    views = {("a", z): SimpleNamespace(silhouette=np.zeros((120, 160), bool), new_band=np.zeros((120, 160), bool))
+             for z in (2.0, 4.0)}
+    plan = JobPlan(part=None, cameras={"a": cam}, pairs=[], check_heights=[(1, 2.0), (2, 4.0)], views=views,
+                   footprint=footprint, max_shift_px={"a": 5.0}, tolerance_px={"a": 2.0})
+    settings = DetectionSettings()
+    first, second = plan.regions("a", 2.0, settings), plan.regions("a", 4.0, settings, 2.0)
+    for z, regions in ((2.0, first), (4.0, second)):
+        flat, mirror = bed_marks_mask(cam, footprint, z, settings.bed_marks_margin_mm)
+        assert np.array_equal(regions.dont_care, flat) and np.array_equal(regions.reflection, mirror)
+    assert second.dont_care is first.dont_care and not first.dont_care.flags.writeable
+
+
+def test_band_shift_on_its_window_is_band_shift_on_the_whole_image(monkeypatch):
+    """layer_shift.band_shift reads the band's window only (its box grown by the reach, the tolerance and what
+    the tolerance ring reads): every figure, map and null score as on the whole image, bands at the image's edge
+    and tolerances that take either of masks.dilate's forms included."""
+    from octoprint_printwatch.core import layer_shift
+    rng = np.random.default_rng(26)
+    cases = []
+    for trial in range(150):
+        h, w = (int(v) for v in rng.integers(60, 200, size=2))
+        before = np.zeros((h, w), bool)
+        top, left = int(rng.integers(0, h - 10)), int(rng.integers(0, w // 2))
+        right = min(w, left + int(rng.integers(8, w // 2 + 10)))
+        rows = int(rng.integers(2, 12))
+        before[top + rows:, left:right] = True
+        band = np.zeros((h, w), bool)
+        band[top:top + rows, left:right] = True
+        band &= rng.random((h, w)) < 0.95
+        dx, dy = (int(v) for v in rng.integers(-6, 7, size=2))
+        seen = before | np.roll(np.roll(band, dx, axis=1), dy, axis=0)
+        observed = seen & (rng.random((h, w)) < 0.9) | (rng.random((h, w)) < 0.02)
+        bed = ~observed & (rng.random((h, w)) < 0.85)
+        undecided = (rng.random((h, w)) < 0.1) if trial % 2 else None
+        reach = int(rng.integers(4, 30))
+        tol = float(rng.choice([0.0, 1.0, 2.0, 3.0, 4.5]))
+        cases.append((observed, bed, before, band, reach, reach // 2, int(rng.integers(1, 5)), tol, undecided))
+
+    def run():
+        return [layer_shift.band_shift(*c[:8], undecided=c[8]) for c in cases]
+
+    fast = run()
+    monkeypatch.setattr(layer_shift, "_window", lambda band, *_: (slice(None), slice(None)))
+    plain = run()
+    tested = 0
+    for trial, (a, b) in enumerate(zip(fast, plain)):
+        assert (a is None) == (b is None), trial
+        if a is not None:
+            tested += 1
+            assert a.figures() == b.figures() and (a.null_dy, a.null_score) == (b.null_dy, b.null_score), trial
+            assert np.array_equal(a.maps, b.maps) and np.array_equal(a.null_scores, b.null_scores), trial
+    assert tested > 100
