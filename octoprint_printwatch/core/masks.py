@@ -118,8 +118,27 @@ FOREIGN_BEFORE_REACH_PX = 5
 FOREIGN_APART_PX = 5
 
 
+#: Blobs are taken apart from a ring this wide (px) around the part's outline zone before they are judged a
+#: rod, or an object reaching in from above that only touches the part: a shadow's fringe, or the part's own rim
+#: a pixel wider than the model, joins everything that touches the part there.
+APART_FROM_OUTLINE_PX = 3
+#: An object reaching in from above the box that meets the part's outline along less than this share of its
+#: own extent only touches it in the picture (the parked hotend at a tall part's top corner, our normal_08: 9
+#: of 259 px); one resting on the part or grown out of it meets it along its whole width (a part tipped over in
+#: place, its top rising above the box, our detach_05: 58-80 px of 56-79).
+POINT_CONTACT_SHARE = 0.25
+
+
+def apart_from_outline(objects: np.ndarray, outline: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``objects`` ((h, w) bool) -> (the pixels farther than APART_FROM_OUTLINE_PX from ``outline``, those
+    nearer): the objects taken apart where only the part's rim or a fringe joins them."""
+    ring = cv2.dilate(outline.astype(np.uint8), disk(APART_FROM_OUTLINE_PX)).astype(bool) & objects
+    return objects & ~ring, ring
+
+
 def reaching_in_from_above(objects: np.ndarray, search: np.ndarray, expected: np.ndarray,
-                           material: np.ndarray | None = None, before: np.ndarray | None = None) -> np.ndarray:
+                           material: np.ndarray | None = None, before: np.ndarray | None = None,
+                           outline: np.ndarray | None = None) -> np.ndarray:
     """(h, w) bool: the pixels of ``objects`` in blobs that reach in from above the ``search`` box and hang
     there, which are not the print's (the parked hotend, the gantry, a hand).
 
@@ -135,17 +154,61 @@ def reaching_in_from_above(objects: np.ndarray, search: np.ndarray, expected: np
     For such a followed object the foot rule is read on its material: the weak pixels grouped with it below
     (its shadow or mirror image on glass) are no foot, while a piece of the part knocked over leans on the
     outline (and its first reading, with the weak pixels, already kept it as the print's).
+    ``outline`` ((h, w) bool, the part's outline zone) or None: a blob kept only for reaching the foot is
+    looked at again taken apart from a ring around the outline (apart_from_outline): a piece of it that reaches
+    in from above on its own and meets the outline at a point (POINT_CONTACT_SHARE) hangs beside the part in
+    this view, joined to its foot by nothing but the part's rim.
     """
-    out = np.zeros(objects.shape, bool)
-    box = bounding_box(objects)
+    out, kept_at_foot = _reaching_in(objects, search, expected, material, before)
+    if outline is not None and kept_at_foot.any():
+        apart, ring = apart_from_outline(kept_at_foot, outline)
+        pieces, _ = _reaching_in(apart, search, expected, material, before)
+        out |= _touching_at_a_point(pieces, ring)
+    return out
+
+
+def _touching_at_a_point(pieces: np.ndarray, ring: np.ndarray) -> np.ndarray:
+    """The blobs of ``pieces`` ((h, w) bool) whose contact with ``ring`` (its pixels next to them) spans less
+    than POINT_CONTACT_SHARE of their own extent (the longer side of their bounding box)."""
+    out = np.zeros(pieces.shape, bool)
+    box = bounding_box(pieces, pad=1)
     if box is None:
         return out
+    inner = (slice(box[0], box[1]), slice(box[2], box[3]))
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(pieces[inner].astype(np.uint8), connectivity=8)
+    # each ring pixel next to a piece, with that piece's label (where two pieces meet at one, either)
+    near = cv2.dilate(labels.astype(np.uint16), np.ones((3, 3), np.uint8))
+    ys, xs = np.nonzero(ring[inner] & (near > 0))
+    which = near[ys, xs].astype(np.int64)
+    low_x, low_y = np.full(count, 1 << 30), np.full(count, 1 << 30)
+    high_x, high_y = np.full(count, -1), np.full(count, -1)
+    np.minimum.at(low_x, which, xs)
+    np.minimum.at(low_y, which, ys)
+    np.maximum.at(high_x, which, xs)
+    np.maximum.at(high_y, which, ys)
+    span = np.maximum(np.maximum(high_x - low_x, high_y - low_y) + 1, 0)
+    extent = np.maximum(stats[:, cv2.CC_STAT_WIDTH], stats[:, cv2.CC_STAT_HEIGHT])
+    point = span < POINT_CONTACT_SHARE * extent
+    point[0] = False
+    out[inner] = point[labels]
+    return out
+
+
+def _reaching_in(objects: np.ndarray, search: np.ndarray, expected: np.ndarray, material: np.ndarray | None,
+                 before: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`reaching_in_from_above` on one grouping of the pixels into blobs -> (the foreign pixels, the
+    pixels of the blobs that reach in from above but were kept for reaching the part's foot)."""
+    out = np.zeros(objects.shape, bool)
+    kept = np.zeros(objects.shape, bool)
+    box = bounding_box(objects)
+    if box is None:
+        return out, kept
     # (on the objects' box only: every blob lies in it, and the whole frame costs several times more)
     y0, y1, x0, x1 = box
     inner = (slice(y0, y1), slice(x0, x1))
     count, labels, area = components(objects[inner])
     if count <= 1:
-        return out
+        return out, kept
     ceiling = np.where(search.any(axis=0), np.argmax(search, axis=0), search.shape[0])[x0:x1]
     above = np.arange(y0, y1)[:, None] < ceiling[None, :]
     beyond = np.bincount(labels[~search[inner]], minlength=count)
@@ -160,12 +223,14 @@ def reaching_in_from_above(objects: np.ndarray, search: np.ndarray, expected: np
         followed = ((total > 0) & (near_part == 0)
                     & (np.bincount(labels[there], minlength=count) >= FOREIGN_BEFORE_SHARE * np.maximum(total, 1)))
     rows = np.flatnonzero(expected.any(axis=1))
+    at_foot = np.zeros(count, bool)
     if rows.size:
         foot_zone = rows[-1] - 0.25 * (rows[-1] - rows[0])
         # (read for the blobs this rule can still change only; label 0 is the rest, never foreign)
         asked = foreign | followed
         asked[0] = False
         lowest = y0 + lowest_rows(labels, asked)
+        at_foot = foreign & (lowest >= foot_zone)
         foreign &= lowest < foot_zone
         if material is not None and followed.any():
             # (a blob without material pixels keeps its own extent: it counts in no figure anyway)
@@ -177,23 +242,31 @@ def reaching_in_from_above(objects: np.ndarray, search: np.ndarray, expected: np
     foreign |= followed
     foreign[0] = False
     out[inner] = foreign[labels]
-    return out
+    at_foot &= ~foreign
+    at_foot[0] = False
+    kept[inner] = at_foot[labels]
+    return out, kept
 
 
 #: A rod or a gantry is at least this many times longer (within the picture) than it is thick.
 ROD_MIN_ELONGATION = 2.5
-#: A rod that ends behind the part is taken for one only while at most this share of the part is missing
-#: from its place (a part that tipped over or slid away can look as long and straight).
-ROD_BEHIND_PART_MAX_MISSING = 0.02
+#: The part stands where it belongs while at most this share of it is missing from its place (a part that
+#: tipped over or slid away can look like a rod ending behind it, or rise above the box joined to its foot only
+#: along its old outline) ...
+PART_IN_PLACE_MAX_MISSING = 0.02
 #: ... and at least this share of it is seen there (a part that cannot be told apart is not known in place).
-ROD_BEHIND_PART_MIN_SEEN = 0.9
+PART_IN_PLACE_MIN_SEEN = 0.9
+#: A rod that ends behind the part runs on beyond the box, at its other end, for at least this many times its
+#: thickness, or out of the picture (a strand on the bed grazing the box's edge: 1.5 px for 14 px thick, seed 8
+#: 025_detach; the X rods of seed 10 015_normal: 18-31 px for 13-15).
+ROD_BEYOND_THICKNESSES = 1.0
 #: Share of a rod's cross-sections that must be on its line and of its thickness (the rest: where
 #: something else touches it, the oblique cut at the picture's edge).
 ROD_REGULAR_SHARE = 0.8
 
 
 def crossing_the_box(objects: np.ndarray, search: np.ndarray, outline: np.ndarray,
-                     part_in_place: bool = True) -> np.ndarray:
+                     part_in_place: bool = True, material: np.ndarray | None = None) -> np.ndarray:
     """(h, w) bool: the pixels of ``objects`` that belong to a rod or a gantry crossing the ``search`` box
     from the side, which are not the print's (the X rods, their reflection in a glass bed).
 
@@ -202,17 +275,29 @@ def crossing_the_box(objects: np.ndarray, search: np.ndarray, outline: np.ndarra
     blob's principal axis its cross-sections (1 px apart; half a thickness at each end left out, where the
     picture's edge cuts it obliquely, and those next to the part) keep their centre on one line (within a
     quarter of the thickness, or 1.5 px) and their width (-40 %/+60 %), ROD_REGULAR_SHARE of them, and the
-    blob is ROD_MIN_ELONGATION times longer than thick. It leaves the box at both ends, or at one end while
-    the other runs on behind the part (it ends at the ring); then the part must stand where it belongs
-    (``part_in_place``: a part that tipped over or slid out of the box, which may look as long and
-    straight, is missing from its place). Only the strip along the fitted line is returned (with the ring's
-    pixels on it): whatever else touches the rod still counts. A tangle is not straight; a part that slid
-    or tipped over inside the box does not leave it at both ends.
+    blob is ROD_MIN_ELONGATION times longer than thick. It leaves the box at both ends, or at one end (and runs
+    on beyond it, ROD_BEYOND_THICKNESSES) while the other runs on behind the part (it ends at the ring); then the
+    part must stand where it belongs (``part_in_place``: a part that tipped over or slid out of the box, which
+    may look as long and straight, is missing from its place). Only the strip along the fitted line is returned
+    (with the ring's pixels on it): whatever else touches the rod still counts. A tangle is not straight; a part
+    that slid or tipped over inside the box does not leave it at both ends.
+
+    ``material`` ((h, w) bool, within ``objects``): the certain material alone. Where it is given, the blobs
+    that are no rod are taken apart again on it: the weakly seen pixels that keep a rod whole also join it
+    to whatever lies next to it (the place the rod held in the background frame, a brim, the part's
+    reflection in a glass bed), and such a blob is neither straight nor of one thickness.
     """
+    out = _rods_among(objects, search, outline, part_in_place)
+    if material is not None:
+        out |= _rods_among(material & ~out, search, outline, part_in_place)
+    return out
+
+
+def _rods_among(objects: np.ndarray, search: np.ndarray, outline: np.ndarray, part_in_place: bool) -> np.ndarray:
+    """:func:`crossing_the_box` for one grouping of the pixels into blobs (``objects``)."""
     out = np.zeros(objects.shape, bool)
     outline_u8 = outline.astype(np.uint8)
-    ring = cv2.dilate(outline_u8, disk(3)).astype(bool) & objects
-    apart = objects & ~ring
+    apart, ring = apart_from_outline(objects, outline)
     count, labels, stats, _ = cv2.connectedComponentsWithStats(apart.astype(np.uint8), connectivity=8)
     if count <= 1:
         return out
@@ -228,16 +313,20 @@ def crossing_the_box(objects: np.ndarray, search: np.ndarray, outline: np.ndarra
     candidates &= (in_box > 0) & (in_box < area)
     at_part = cv2.dilate(outline_u8, disk(5)).astype(bool)
     h, w = objects.shape
+    behind = []     # the lines of the rods that run on behind the part
     for index in np.flatnonzero(candidates):
         x0, y0 = stats[index, cv2.CC_STAT_LEFT], stats[index, cv2.CC_STAT_TOP]
         x1, y1 = x0 + stats[index, cv2.CC_STAT_WIDTH], y0 + stats[index, cv2.CC_STAT_HEIGHT]
         ys, xs = np.nonzero(labels[y0:y1, x0:x1] == index)
         ys, xs = ys + y0, xs + x0
+        at_edge = (xs == 0) | (ys == 0) | (xs == w - 1) | (ys == h - 1)
         line = _rod_line(xs.astype(np.float64), ys.astype(np.float64), at_part[ys, xs], search[ys, xs],
-                         part_in_place)
+                         part_in_place, at_edge)
         if line is None:
             continue
-        centre, direction, normal, first, last, half_width = line
+        centre, direction, normal, first, last, half_width, part_end = line
+        if part_end:
+            behind.append((centre, direction, normal, last if part_end > 0 else first, part_end, half_width))
         # the strip along the line, over the blob's length and the ring at its ends
         by0, by1, bx0, bx1 = max(0, y0 - 6), min(h, y1 + 6), max(0, x0 - 6), min(w, x1 + 6)
         gy, gx = np.mgrid[by0:by1, bx0:bx1]
@@ -245,13 +334,42 @@ def crossing_the_box(objects: np.ndarray, search: np.ndarray, outline: np.ndarra
         across = (gx - centre[0]) * normal[0] + (gy - centre[1]) * normal[1]
         strip = (np.abs(across) <= half_width) & (along >= first - 6) & (along <= last + 6)
         out[by0:by1, bx0:bx1] |= strip & ((labels[by0:by1, bx0:bx1] == index) | ring[by0:by1, bx0:bx1])
+    if behind:
+        out |= _rods_come_out(labels, stats, at_part, behind) & ~out
     return out
 
 
-def _rod_line(xs: np.ndarray, ys: np.ndarray, at_part: np.ndarray, in_box: np.ndarray, part_in_place: bool):
+def _rods_come_out(labels: np.ndarray, stats: np.ndarray, at_part: np.ndarray, behind: list) -> np.ndarray:
+    """(h, w) bool: the pieces of rods that come out on the far side of the part. A rod that runs on behind
+    the part shows again beyond it, where it may end inside the box (at the carriage, or its own end): a
+    blob next to the part, wholly past the rod's end at the part, on the rod's line (ROD_REGULAR_SHARE of
+    its pixels within the rod's strip). Only its pixels on the strip are returned."""
+    out = np.zeros(labels.shape, bool)
+    for index in range(1, len(stats)):
+        if stats[index, cv2.CC_STAT_AREA] < 30:
+            continue
+        x0, y0 = stats[index, cv2.CC_STAT_LEFT], stats[index, cv2.CC_STAT_TOP]
+        x1, y1 = x0 + stats[index, cv2.CC_STAT_WIDTH], y0 + stats[index, cv2.CC_STAT_HEIGHT]
+        ys, xs = np.nonzero(labels[y0:y1, x0:x1] == index)
+        ys, xs = ys + y0, xs + x0
+        if not at_part[ys, xs].any():
+            continue
+        for origin, direction, normal, end, side, half_width in behind:
+            along = (xs - origin[0]) * direction[0] + (ys - origin[1]) * direction[1]
+            on_line = np.abs((xs - origin[0]) * normal[0] + (ys - origin[1]) * normal[1]) <= half_width
+            if np.all(side * (along - end) > 0) and on_line.mean() >= ROD_REGULAR_SHARE:
+                out[ys[on_line], xs[on_line]] = True
+                break
+    return out
+
+
+def _rod_line(xs: np.ndarray, ys: np.ndarray, at_part: np.ndarray, in_box: np.ndarray, part_in_place: bool,
+              at_edge: np.ndarray):
     """See :func:`crossing_the_box`: one blob's pixels (n,) with, per pixel, whether it is next to the
-    part's outline zone and inside the search box -> (centre (2,), direction (2,), normal (2,), first, last,
-    half width) of the rod's strip in image coordinates, or None when the blob is no rod crossing the box."""
+    part's outline zone, inside the search box and on the picture's edge -> (centre (2,), direction (2,),
+    normal (2,), first, last, half width, part end) of the rod's strip in image coordinates, or None when the
+    blob is no rod crossing the box; part end: 1 or -1 where the rod's last or first end runs on behind the
+    part, else 0."""
     points = np.stack([xs, ys], axis=1)
     centre = points.mean(axis=0)
     _, vectors = np.linalg.eigh(np.cov((points - centre).T))
@@ -295,6 +413,13 @@ def _rod_line(xs: np.ndarray, ys: np.ndarray, at_part: np.ndarray, in_box: np.nd
             return None
     if ends != ["beyond", "beyond"] and ("beyond" not in ends or not part_in_place):
         return None
+    if "part" in ends:
+        # seen at one end only, it must run on beyond the box for its thickness, or out of the picture: a strand
+        # lying on the bed from the part's foot across the box's edge is no rod
+        half = bins < n / 2 if ends[0] == "beyond" else bins >= n / 2
+        if (np.count_nonzero(~in_box[half]) < ROD_BEYOND_THICKNESSES * thickness ** 2
+                and not at_edge[half].any()):
+            return None
     # the strip: the fitted line (straighten the axis by the fitted slope), as wide as the regular sections
     tilt = np.arctan(slope)
     direction, normal = (np.cos(tilt) * direction + np.sin(tilt) * normal,
@@ -306,7 +431,8 @@ def _rod_line(xs: np.ndarray, ys: np.ndarray, at_part: np.ndarray, in_box: np.nd
     regular = np.zeros(n, bool)
     regular[np.flatnonzero(inner)[straight & even]] = True
     half_width = float(np.percentile(np.abs(pixel_across[regular[bins]]), 98)) + 1.0
-    return origin, direction, normal, float(pixel_along.min()), float(pixel_along.max()), half_width
+    part_end = 1 if ends[1] == "part" else -1 if ends[0] == "part" else 0
+    return origin, direction, normal, float(pixel_along.min()), float(pixel_along.max()), half_width, part_end
 
 
 #: A blob is the mirror image of something above the search box when, at the best distance tried, this

@@ -45,7 +45,7 @@ from .nest import STALL_READ_BELOW_GROWTH_PCT, part_coverage, region_texture
 from .shadows import shade_of_clipped_bed, shadow_left
 from .masks import (around, bounding_box, components, dilate, disk, erode, outline_zone,  # noqa: F401  (re-exported)
                     reaching_in_from_above, shift_mask, crossing_the_box, mirror_match, MIRROR_MATCH_SHARE,
-                    ROD_BEHIND_PART_MAX_MISSING, ROD_BEHIND_PART_MIN_SEEN)
+                    PART_IN_PLACE_MAX_MISSING, PART_IN_PLACE_MIN_SEEN)
 
 #: Shadows keep at least this fraction of the bed's brightness; darker than that is material anywhere.
 SHADOW_MIN_RATIO = 0.35
@@ -955,6 +955,9 @@ class Comparison:
     #: the material of the objects found reaching in from above the search box (the parked hotend), for
     #: the next check
     foreign: np.ndarray | None = None
+    #: the part stands where it belongs (next to nothing of it missing, nearly all of it seen): an object from
+    #: above that meets its outline at a point was judged apart from it (masks.reaching_in_from_above)
+    part_in_place: bool = False
 
 
 def _not_a_mark(observed: np.ndarray, last_observed: np.ndarray, expected: np.ndarray, previous: np.ndarray,
@@ -1011,13 +1014,19 @@ def compare_masks(
     grown = outline_zone(expected, tolerance, top_tolerance)
     outside = observed & ~grown
     objects = foreign = None
+    # (a part that tipped over or slid away can look like a rod, or rise above the box joined to its foot
+    # only along its old outline: it is missing from its place)
+    in_place = (int(missing.sum()) <= PART_IN_PLACE_MAX_MISSING * max(int(expected.sum()), 1)
+                and np.count_nonzero(observed & core) >= PART_IN_PLACE_MIN_SEEN * np.count_nonzero(core))
     if outside.any():
         # Something reaching in from outside the search box (the parked hotend, the gantry, a hand) is not
         # the print's. Objects are grouped on everything not confidently bed (``linked``): the parked
         # hotend's nozzle stays one object with its dark, weakly seen body even when only the nozzle is
-        # certain material.
+        # certain material. While the part stands in place, its rim just outside the outline does not join an
+        # object that meets it at a point to its foot (the parked hotend at a tall part's top corner).
         objects = outside if linked is None else (outside | (linked & ~grown))
-        foreign = reaching_in_from_above(objects, search, expected, material=outside, before=foreign_before)
+        foreign = reaching_in_from_above(objects, search, expected, material=outside, before=foreign_before,
+                                         outline=grown if in_place else None)
         outside &= ~foreign
         foreign &= observed        # (followed on its material: not on the shadow or mirror image it links)
     extra = (outside & search).astype(np.uint8)
@@ -1029,9 +1038,7 @@ def compare_masks(
         # ... nor is a rod crossing the box from the side (the X rods, their reflection in glass); one that
         # ends behind the part only while the part stands where it belongs (core/masks.py). (Looked for
         # only when extra material reaches the box's edge, as a rod's does: most checks have none.)
-        in_place = (int(missing.sum()) <= ROD_BEHIND_PART_MAX_MISSING * max(int(expected.sum()), 1)
-                    and np.count_nonzero(observed & core) >= ROD_BEHIND_PART_MIN_SEEN * np.count_nonzero(core))
-        outside &= ~crossing_the_box(objects, search, grown, part_in_place=in_place)
+        outside &= ~crossing_the_box(objects, search, grown, part_in_place=in_place, material=outside)
         extra = cv2.morphologyEx(cv2.morphologyEx((outside & search).astype(np.uint8), cv2.MORPH_CLOSE, _KERNEL3),
                                  cv2.MORPH_OPEN, _KERNEL5)
     extra = extra.astype(bool) & ~grown
@@ -1077,6 +1084,7 @@ def compare_masks(
         band_pixels=int(band.sum()),
         band_core_pixels=int(band_core.sum()),
         foreign=foreign,
+        part_in_place=in_place,
     )
 
 
@@ -1361,7 +1369,8 @@ def check_shape(
                                    # answer, unless it followed objects of the previous check)
                                    foreign=(comparison.foreign if comparison.foreign is not None
                                             and (followed_before is None or not followed_before.any())
-                                            else None))
+                                            else None),
+                                   part_in_place=comparison.part_in_place)
 
     reasons: list[str] = []
     decisive = False

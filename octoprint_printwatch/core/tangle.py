@@ -87,6 +87,7 @@ def new_material(
     bed_to_image: np.ndarray | None = None,
     not_the_prints: Callable[[np.ndarray], np.ndarray] | None = None,
     foreign: np.ndarray | None = None,
+    part_in_place: bool = False,
 ) -> NewMaterial | None:
     """Material seen now and not at the previous check, outside the expected part and attached to it.
 
@@ -113,6 +114,8 @@ def new_material(
         compare_masks found them on the same masks (``observed``, ``expected``, ``search``, ``linked``, the
         same tolerance) with no objects of a previous check to follow; given, it is not searched again
         (the same pixels: ``new`` lies in ``observed``). None: searched here.
+    part_in_place : the part stands where it belongs (compare_masks' Comparison.part_in_place): objects are then
+        taken apart from a ring around its outline before they are searched, as compare_masks does.
     Returns None when the test cannot be made (no scale, no previous mask, empty expected part).
     """
     if px_per_mm <= 0 or previous is None or previous.shape != observed.shape or not expected.any():
@@ -145,7 +148,8 @@ def new_material(
     # with everything not confidently bed as in compare_masks (the nozzle and its dark body are one object);
     # nor are strands leaving the box upwards on their own (filament pulled towards the parked nozzle)
     if foreign is None:
-        foreign = reaching_in_from_above(outside if linked is None else outside | (linked & ~grown), search, expected)
+        foreign = reaching_in_from_above(outside if linked is None else outside | (linked & ~grown), search, expected,
+                                         outline=grown if part_in_place else None)
     new &= ~foreign
     new &= ~reaching_in_from_above(outside, search, expected)
     count, labels, area = components(new)
