@@ -63,11 +63,7 @@ SHIFT_PERSISTS_CONFIRMED_ONE_VIEW = 0.70
 SHIFT_WAS_NOT_THERE = 0.5
 SHIFT_PERSISTS_WITHIN_MM = 1.0
 #: Confirming pixels needed in all (at the 640-px working width: a band's edge a few px wide and tall),
-#: from several directions and from one. A shift seen at two checks (:func:`persists`) needs them over the two
-#: checks' bands together: each check's band is new evidence of the same move, and a small part seen small gives
-#: a few dozen confirming pixels per check however clear the shift (cross-check seed 10 `023`: a 3-mm shift of a
-#: stack's 16-px-wide top tier, 82 then 124 confirming px at 0.88 of the decided ones; one-check readings before any
-#: failure reach a share of 1.0 on 45 px, so one check keeps its own floor).
+#: from several directions and from one.
 SHIFT_MIN_SUPPORT_PX = 60
 SHIFT_MIN_SUPPORT_ONE_VIEW_PX = 150
 #: A shift the previous check's views read clearly not there (a new one) is also confirmed by the same shares
@@ -650,13 +646,11 @@ def _was_there(shift: LayerShift | None) -> bool:
 
 
 def _confirms(shift: LayerShift, min_mm: float, several_share: float, one_view_share: float,
-              sure: bool = False, evidence_px: float | None = None) -> bool:
-    """``evidence_px``: the confirming pixels held against the support floor (default: this check's own)."""
+              sure: bool = False) -> bool:
     several = shift.viewpoints >= 2
     share = shift.confirmed_sure if sure else shift.confirmed
-    evidence_px = shift.support if evidence_px is None else evidence_px
     return (bool(shift.cameras) and shift.magnitude_mm >= min_mm
-            and evidence_px >= (SHIFT_MIN_SUPPORT_PX if several else SHIFT_MIN_SUPPORT_ONE_VIEW_PX)
+            and shift.support >= (SHIFT_MIN_SUPPORT_PX if several else SHIFT_MIN_SUPPORT_ONE_VIEW_PX)
             and share >= (several_share if several else one_view_share)
             and (not sure or shift.overhang >= SHIFT_OVERHANG_SHARE * shift.support)
             and shift.against <= SHIFT_AGAINST * shift.support
@@ -699,13 +693,10 @@ def persists(shift: LayerShift, min_mm: float) -> bool:
     """Whether the shift is new and seen at two consecutive checks: confirmed now and in the previous
     check's views by SHIFT_PERSISTS_CONFIRMED (one view: ..._ONE_VIEW, the other rules as
     :func:`confirms_layer_shift`), and by less than SHIFT_WAS_NOT_THERE at the check before them (all three
-    checks testing their own band; see :func:`with_history`), the support floor met by the two checks together."""
-    if not (len(shift.before) >= 2 and shift.before[0] is not None and not _was_there(shift.before[1])):
-        return False
-    together = shift.support + shift.before[0].support
-    return (_confirms(shift, min_mm, SHIFT_PERSISTS_CONFIRMED, SHIFT_PERSISTS_CONFIRMED_ONE_VIEW, evidence_px=together)
-            and _confirms(shift.before[0], min_mm, SHIFT_PERSISTS_CONFIRMED, SHIFT_PERSISTS_CONFIRMED_ONE_VIEW,
-                          evidence_px=together))
+    checks testing their own band; see :func:`with_history`)."""
+    return (len(shift.before) >= 2 and shift.before[0] is not None and not _was_there(shift.before[1])
+            and _confirms(shift, min_mm, SHIFT_PERSISTS_CONFIRMED, SHIFT_PERSISTS_CONFIRMED_ONE_VIEW)
+            and _confirms(shift.before[0], min_mm, SHIFT_PERSISTS_CONFIRMED, SHIFT_PERSISTS_CONFIRMED_ONE_VIEW))
 
 
 def was_there_before(shift: LayerShift) -> bool:
