@@ -484,7 +484,10 @@ def mirror_match(pixels: np.ndarray, camera, changed_at, search: np.ndarray, min
         if below.mean() < MIRROR_MIN_SEEN or np.percentile(-at[below, 2], 5) < min_height:
             continue
         mirrored = at[below] * np.array([1.0, 1.0, -1.0])
-        image = np.round(camera.project(mirrored)).astype(np.int64)
+        projected = camera.project(mirrored)
+        # a mirrored point behind the camera projects to NaN: never inside
+        projected[~np.isfinite(projected).all(axis=1)] = -1.0
+        image = np.round(projected).astype(np.int64)
         inside = (image[:, 0] >= 0) & (image[:, 0] < w) & (image[:, 1] >= 0) & (image[:, 1] < h)
         inside[inside] = ~search[image[inside, 1], image[inside, 0]]
         if inside.sum() < MIRROR_MIN_SEEN * len(points):

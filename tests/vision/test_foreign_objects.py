@@ -212,3 +212,22 @@ def test_blobs_found_to_be_something_else_count_in_no_figure():
     dropped = compare_masks(*args, not_the_prints=lambda extra: extra & blob)
     assert not dropped.extra.any() and dropped.band_extra == 0
     assert dropped.missing.sum() == counted.missing.sum()
+
+
+def test_a_blob_whose_mirror_image_falls_behind_a_steep_camera_is_scored_quietly():
+    """A camera looking steeply down: at the farther trial distances a blob's mirror image lies behind it
+    (projected to NaN). Those points are simply not in the frame: no numpy cast warning, a share in 0-1."""
+    import warnings
+    from octoprint_printwatch.core.camera import Camera
+    from octoprint_printwatch.core.masks import mirror_match
+    camera = Camera.look_at("top", (100.0, -60.0, 250.0), (100.0, 60.0, 0.0), width=640, height=480,
+                            hfov_deg=70.0)
+    search = np.zeros((480, 640), bool)
+    search[200:300, 250:400] = True
+    changed = np.ones((480, 640), bool)
+    ys, xs = np.mgrid[0:30, 100:200]           # a blob at the top edge of the frame
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        share = mirror_match(np.stack([xs.ravel(), ys.ravel()], axis=1), camera,
+                             lambda qx, qy: changed[qy, qx], search)
+    assert 0.0 <= share <= 1.0
