@@ -435,7 +435,8 @@ RISE_QUIET_CHECKS = 2
 
 def missing_since_rise(kept: float | None, rise: float | None, missing: float,
                        min_growth_pct: float, quiet: int = 0,
-                       threshold: float | None = None) -> tuple[float | None, int]:
+                       threshold: float | None = None,
+                       rise_before: float | None = None) -> tuple[float | None, int]:
     """A view's ``CameraState.rise_missing`` and ``rise_quiet`` after a check: its missing material
     (``missing``, %) when it read the part rising there (``rise``: fine or else coarse growth, % of the expected
     rise, at least :data:`COARSE_ROSE_BEFORE_PCT`); the value ``kept`` from an earlier such check while it
@@ -443,10 +444,14 @@ def missing_since_rise(kept: float | None, rise: float | None, missing: float,
     does not rise in this view there, e.g. a tier printed inside the silhouette of the one below: no evidence
     either way), counting the checks since (``quiet``) at which it misses under a quarter of ``threshold``
     more than ``kept`` (None: none counted), and forgotten at the :data:`RISE_QUIET_CHECKS`-th; None after any
-    other reading."""
+    other reading, except a part of the rise (``min_growth_pct`` to :data:`COARSE_ROSE_BEFORE_PCT`) read right
+    after the rising check itself (``rise_before``: the view's reading at its previous check): the check after a
+    stop reads the layers printed before it in that interval, the checks after it none."""
     if rise is not None and rise >= COARSE_ROSE_BEFORE_PCT:
         return missing, 0
-    if kept is None or (rise is not None and not -15.0 <= rise < min_growth_pct):
+    stop_within_interval = (rise is not None and min_growth_pct <= rise
+                            and (rise_before or 0.0) >= COARSE_ROSE_BEFORE_PCT)
+    if kept is None or (rise is not None and not -15.0 <= rise < min_growth_pct and not stop_within_interval):
         return None, 0
     if threshold is not None and missing - kept < threshold / 4.0:
         quiet += 1
@@ -1020,10 +1025,11 @@ class CheckRunner:
                 continue
             state.last_band_texture = None if r.first_look else r.band_texture
             state.last_extra, state.last_missing, state.last_foreign = r.extra_pct, r.missing_pct, r.foreign_mask
+            rise_before_this = state.last_rise
             state.last_rise = r.growth_pct if r.growth_pct is not None else r.coarse_growth_pct
             state.rise_missing, state.rise_quiet = missing_since_rise(
                 state.rise_missing, state.last_rise, r.missing_pct, settings.min_growth_pct,
-                quiet=state.rise_quiet, threshold=r.threshold)
+                quiet=state.rise_quiet, threshold=r.threshold, rise_before=rise_before_this)
         self.previous_z = z
         return CheckResult(layer=int(layer), z=float(z), verdict=verdict, shape_error_pct=errors, shape=shape,
                            size=size, reasons=reasons, seconds=time.perf_counter() - started,

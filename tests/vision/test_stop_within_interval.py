@@ -1,0 +1,33 @@
+"""A stop is a change: the check after it reads part of the interval's rise, while the gap is still too shallow
+to read as missing material."""
+from octoprint_printwatch.core.pipeline import decide, missing_since_rise
+from octoprint_printwatch.core.settings import DetectionSettings
+from octoprint_printwatch.core.shape_check import ShapeResult
+
+
+def view(name, *, coarse=None, span=None, band_missing=0.0, missing=0.0):
+    return ShapeResult(name, missing, missing, missing, 0.0, band_missing, band_missing, 500, 5000, None,
+                       (0, 0), 7.0, 50.0, passed=True, usable=True, reasons=[], coarse_growth_pct=coarse,
+                       span_growth_pct=span, growth_span=None if span is None else 3)
+
+
+def test_a_part_of_the_rise_read_right_after_a_rising_check_keeps_the_rise():
+    """Cross-check seed 7 028_runout (one camera, a rise of 4-6 px per check): coarse 100 % at check 2 (nothing
+    missing), 25 % at check 3 (the stop fell within that interval: the layers before it were printed), 0 % at
+    check 4 with 4.2 % of the part missing. The 25 % reading forgot the rise, so the coarse stall rule had
+    nothing to measure check 4's missing material against; caught at check 5."""
+    s = DetectionSettings()
+    state = missing_since_rise(None, 100.0, 0.0, s.min_growth_pct)                                 # check 2
+    state = missing_since_rise(*state[:1], 25.0, 0.0, s.min_growth_pct, state[1], 7.0, rise_before=100.0)
+    assert state[0] == 0.0                                                                          # check 3
+    now = {"s0": view("s0", coarse=0.0, band_missing=8.96, missing=4.19)}                          # check 4
+    before = dict(rise_before={"s0": 25.0}, missing_before={"s0": 0.0})
+    assert decide(now, {}, s, **before)[0] == "ok"                                   # HEAD: the rise forgotten
+    verdict, reasons = decide(now, {}, s, **before, missing_at_rise={"s0": state[0]})
+    assert verdict == "fail" and any("not grown as expected" in r for r in reasons)
+    # only right after the rising check: a view reading a part of the rise again and again forgets it
+    again = missing_since_rise(*state[:1], 25.0, 0.0, s.min_growth_pct, state[1], 7.0, rise_before=25.0)
+    assert again[0] is None
+    # and without the previous reading (HEAD's call) a partial reading forgets it as before
+    assert missing_since_rise(0.0, 30.0, 1.0, s.min_growth_pct)[0] is None
+
