@@ -15,7 +15,7 @@ import math
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any, Collection, Mapping, Sequence
 
 import cv2
 import numpy as np
@@ -488,7 +488,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
            rise_before: Mapping[str, float | None] | None = None,
            missing_before: Mapping[str, float] | None = None,
            missing_at_rise: Mapping[str, float] | None = None,
-           band_texture_before: Mapping[str, float] | None = None) -> tuple[str, list[str]]:
+           band_texture_before: Mapping[str, float] | None = None,
+           span_rise_before: Mapping[str, float] | None = None) -> tuple[str, list[str]]:
     """The combined decision rule -> (verdict, reasons).
 
     * A camera counts only when it gave a frame and its background still matches the bed
@@ -523,7 +524,10 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       view reading under it misses half the threshold more of the part than at its previous check
       (``missing_before``); a view that read such a rise at an earlier check and no rise (or no reading) at
       every check since (``missing_at_rise``: its missing material at that check; :func:`missing_since_rise`)
-      counts too, measured against that check,
+      counts too, measured against that check; where a view gives no one-check reading, its reading over the last
+      checks (``ShapeResult.span_growth_pct``) stands in for the fine rules, and a view whose own reading at its
+      previous check (``span_rise_before``: fine, else over the span) was a rise of ``COARSE_ROSE_BEFORE_PCT`` needs
+      no missing material to corroborate it,
       or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
       abstains reports no ``error_pct`` and never fails);
     * or when the cameras together confirm that the newest layers sit sideways on the older ones
@@ -562,9 +566,10 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     # previous one (a top face the colour of what lies behind it); readings below -15 % are left out.
     band_coverage_before = band_coverage_before or {}
 
-    def stall_rules(read: Mapping[str, float]) -> tuple[bool, list]:
+    def stall_rules(read: Mapping[str, float], stopped: Collection[str] = ()) -> tuple[bool, list]:
         """Whether the part stalled by the rules below on the growth readings ``read`` (camera -> %, each of -15 %
-        or more), and the views whose newest band is bare (for the reasons)."""
+        or more), and the views whose newest band is bare (for the reasons). ``stopped``: views whose low reading
+        needs no missing material to corroborate it (a rise they read at their previous check)."""
         measured = {cam: usable[cam] for cam in read}
         growth = list(read.values())
         # ... and where the part stopped, its newest layers are missing in a view that sees no rise; without
@@ -573,7 +578,7 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
         # as a whole, like the bed: then only the newest band itself gone counts)
         band_gone = any(read[cam] < settings.min_growth_pct
                         and ((r.band_missing_pct or 0.0) >= 25.0
-                             or (not top_closing and r.missing_pct >= r.threshold / 2.0))
+                             or (not top_closing and (r.missing_pct >= r.threshold / 2.0 or cam in stopped)))
                         for cam, r in measured.items())
         stalled = bool(growth) and float(np.median(growth)) < settings.min_growth_pct and band_gone
         # A part rising at under half the expected rate while two views that see it slow each miss part of its
@@ -583,7 +588,7 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
         # gap reaches below the band, half the threshold of the whole part, as for band_gone above)
         slowed_views = [r for cam, r in measured.items()
                         if read[cam] < 50.0 and ((r.band_missing_pct or 0.0) >= 15.0
-                                                 or r.missing_pct >= r.threshold / 2.0)]
+                                                 or r.missing_pct >= r.threshold / 2.0 or cam in stopped)]
         stalled = stalled or (not top_closing and len(growth) >= 2 and float(np.median(growth)) < 50.0
                               and len(slowed_views) >= 2)
         # A part that stopped under a nest of strands (spaghetti) reads no missing material: the pile fills its
@@ -612,7 +617,13 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
                if r.growth_pct is None and r.span_growth_pct is not None and r.span_growth_pct >= -15.0}
     if spanned and not stalled:
         with_span = {**{cam: r.growth_pct for cam, r in measured.items()}, **spanned}
-        stalled, bare_band = stall_rules(with_span)
+        # A gap a few pixels deep hides in the outline's tolerance, so a view whose span reading is the first
+        # to see the part slow misses nothing yet; its own reading at its previous check (``span_rise_before``:
+        # fine, else over the span) corroborates it instead when that read the part rising: a stop is a change,
+        # while a top the camera cannot tell from what lies behind it never reads a rise.
+        stopped = {cam for cam in spanned
+                   if ((span_rise_before or {}).get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT}
+        stalled, bare_band = stall_rules(with_span, stopped)
         if stalled:
             growth = list(with_span.values())
             growth_since = "over the last checks"
@@ -821,6 +832,9 @@ class CameraState:
     older_observed: list = field(default_factory=list)
     #: the growth it read at its last usable check (None: it could not measure one)
     last_growth: float | None = None
+    #: its fine growth reading, else its reading over several checks, at the previous check (None: neither, or
+    #: not usable there): decide's span stall rules
+    last_span_rise: float | None = None
     #: its extra material at the previous check (None: not usable there)
     last_extra: float | None = None
     #: its growth reading at the previous check, fine or else coarse (None: none), and its missing material
@@ -916,6 +930,8 @@ class CheckRunner:
         growth_before = {name: state.last_growth for name, state in self.cameras.items()}
         extra_before = {name: state.last_extra for name, state in self.cameras.items() if state.last_extra is not None}
         rise_before = {name: state.last_rise for name, state in self.cameras.items() if state.last_rise is not None}
+        span_rise_before = {name: state.last_span_rise for name, state in self.cameras.items()
+                            if state.last_span_rise is not None}
         missing_before = {name: state.last_missing for name, state in self.cameras.items()
                           if state.last_missing is not None}
         missing_at_rise = {name: state.rise_missing for name, state in self.cameras.items()
@@ -1014,18 +1030,21 @@ class CheckRunner:
                                   layer_shift=layer_shift, top_closing=top_closing, pairs=self.plan.pairs,
                                   extra_before=extra_before, band_coverage_before=coverage_before,
                                   rise_before=rise_before, missing_before=missing_before,
-                                  missing_at_rise=missing_at_rise, band_texture_before=texture_before)
+                                  missing_at_rise=missing_at_rise, band_texture_before=texture_before,
+                                  span_rise_before=span_rise_before)
         verdict, reasons = decide(**self.last_decision)
         for name, state in self.cameras.items():
             r = shape.get(name)
             if r is None or not r.usable:
                 state.last_extra = state.last_rise = state.last_missing = state.last_foreign = None
+                state.last_span_rise = None
                 state.rise_missing, state.rise_quiet = None, 0
                 state.last_band_texture = None
                 continue
             state.last_band_texture = None if r.first_look else r.band_texture
             state.last_extra, state.last_missing, state.last_foreign = r.extra_pct, r.missing_pct, r.foreign_mask
             rise_before_this = state.last_rise
+            state.last_span_rise = r.growth_pct if r.growth_pct is not None else r.span_growth_pct
             state.last_rise = r.growth_pct if r.growth_pct is not None else r.coarse_growth_pct
             state.rise_missing, state.rise_quiet = missing_since_rise(
                 state.rise_missing, state.last_rise, r.missing_pct, settings.min_growth_pct,

@@ -1,5 +1,5 @@
-"""A stop is a change: the check after it reads part of the interval's rise, while the gap is still too shallow
-to read as missing material."""
+"""A stop is a change: the check after it reads part of the interval's rise (or the part slowing over a span),
+while the gap is still too shallow to read as missing material."""
 from octoprint_printwatch.core.pipeline import decide, missing_since_rise
 from octoprint_printwatch.core.settings import DetectionSettings
 from octoprint_printwatch.core.shape_check import ShapeResult
@@ -31,3 +31,23 @@ def test_a_part_of_the_rise_read_right_after_a_rising_check_keeps_the_rise():
     # and without the previous reading (HEAD's call) a partial reading forgets it as before
     assert missing_since_rise(0.0, 30.0, 1.0, s.min_growth_pct)[0] is None
 
+
+def test_two_views_slowing_over_their_span_right_after_reading_a_rise_stalled():
+    """Cross-check seed 9 040_runout (a grey box seen ~40 px wide by a stereo pair, 1-2 px of rise per check):
+    over three checks the pair read 50 / 67 % at check 3 (the span reaching back before the stop) and 14 / 33 %
+    at check 4, with nothing missing: the 5-px gap hides in the outline's 2-px tolerance and the part stood a
+    little taller than the model in this view. Caught at check 5 (6 % missing in s0L)."""
+    s = DetectionSettings()
+    now = {"s0L": view("s0L", span=14.3), "s0R": view("s0R", span=33.3)}
+    assert decide(now, {}, s)[0] == "ok"                                             # HEAD: nothing missing
+    verdict, reasons = decide(now, {}, s, span_rise_before={"s0L": 50.0, "s0R": 66.7})
+    assert verdict == "fail" and any("not grown as expected over the last checks" in r for r in reasons)
+    # a view that read no rise at its previous check (it cannot see this part's top rise) corroborates nothing
+    assert decide(now, {}, s, span_rise_before={"s0L": 50.0, "s0R": 20.0})[0] == "ok"
+    # one view slowing is not enough for the slowed rule; a stall (under 15 %) in one that read a rise is
+    assert decide({"s0L": view("s0L", span=33.3), "s0R": view("s0R", span=80.0)}, {}, s,
+                  span_rise_before={"s0L": 66.7, "s0R": 100.0})[0] == "ok"
+    assert decide({"s0L": view("s0L", span=0.0), "s0R": view("s0R", span=0.0)}, {}, s,
+                  span_rise_before={"s0L": 57.1, "s0R": 42.9})[0] == "fail"
+    # not where a top surface closes (a smooth top skin)
+    assert decide(now, {}, s, span_rise_before={"s0L": 50.0, "s0R": 66.7}, top_closing=True)[0] == "ok"
