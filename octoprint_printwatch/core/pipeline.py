@@ -26,7 +26,7 @@ from .settings import DetectionSettings
 from .layer_shift import (BandShift, LayerShift, confirms_layer_shift, describe_layer_shift, estimate_layer_shift,
                           with_history)
 from .shape_check import (GROWTH_SPAN_CHECKS, ExpectedRegions, ShapeResult, check_shape,
-                          not_decisive_where_calibrated)
+                          near_any, not_decisive_where_calibrated)
 from .nest import NEST_MAX_COVERAGE, SOLID_MIN_COVERAGE, STALL_READ_BELOW_GROWTH_PCT, textured_views
 from .tangle import SLOWED_RISE_PCT, loose_material
 
@@ -882,10 +882,7 @@ OUTLINE_DISAGREES_PX = 2
 
 def _among(shift: tuple[int, int], candidates: np.ndarray | None) -> bool:
     """Whether ``shift`` (dx, dy) is one of ``candidates`` ((k, 2) int, or None: no)."""
-    if candidates is None or not len(candidates):
-        return False
-    c = np.asarray(candidates)
-    return bool(((c[:, 0] == shift[0]) & (c[:, 1] == shift[1])).any())
+    return near_any(shift, candidates, 0)
 
 
 def _px_apart(a: tuple[int, int], b: tuple[int, int]) -> int:
