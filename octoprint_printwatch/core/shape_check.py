@@ -838,45 +838,6 @@ def profile_growth(observed: np.ndarray, previous: np.ndarray, expected: np.ndar
     return float(np.median(np.clip(ratio, -1.0, 2.0)) * 100.0)
 
 
-def _model_rise(outline_before: np.ndarray, outline: np.ndarray) -> int:
-    """Whole px the model's upper outline rose from ``outline_before`` to ``outline`` ((h, w) bool each; median over
-    the columns both hold, 0 when it did not rise)."""
-    rise = upper_profile(outline_before) - upper_profile(outline)
-    rise = rise[~np.isnan(rise)]
-    return max(int(round(float(np.median(rise)))), 0) if rise.size else 0
-
-
-def _above_outline(mask: np.ndarray, outline: np.ndarray, reach: float) -> np.ndarray:
-    """(h, w) bool: the pixels of ``mask`` up to ``reach`` px above the upper outline of ``outline``, in its columns."""
-    top = upper_profile(outline)[None, :]
-    rows = np.arange(mask.shape[0], dtype=np.float32)[:, None]
-    return mask & (rows < top) & (rows >= top - reach)        # (NaN columns: nothing is above them)
-
-
-def risen_with_the_part(seen_before: np.ndarray, expected_before: np.ndarray, expected: np.ndarray,
-                        reach: float, older: tuple[np.ndarray, np.ndarray] | None, tolerance: float) -> np.ndarray:
-    """(h, w) bool: what of the material seen at the previous check (``seen_before``) stood above the model's upper
-    outline then and at the look before (``older``: (material, the model's silhouette then)), raised by the rise that
-    outline made since (``expected_before`` -> ``expected``: the model's silhouettes then and now; every silhouette
-    aligned alike, all (h, w) bool); all False when nothing stood there.
-
-    The same camera keeps the same calibration error: a part's top that stood a few px above a misplaced outline
-    at two checks stands as far above it now, and that is the part growing as the model says, not new material.
-    Only that rises: what stood up to ``reach`` px (the alignment bound) above the outline, in its columns, at
-    both looks (the older one raised by the model's rise to the previous, within ``tolerance``): not the part's
-    foot, a brim or what lies beside it, not the bed behind it seen above its top from an oblique camera, and not
-    the first layers of a layer shift, which stick out at one check only before the next.
-    """
-    step = _model_rise(expected_before, expected)
-    if older is None or step == 0:
-        return np.zeros_like(seen_before)
-    older_mask, older_outline = older
-    then = dilate(shift_mask(_above_outline(older_mask, older_outline, reach), 0,
-                             -_model_rise(older_outline, expected_before)), tolerance)
-    standing = _above_outline(seen_before, expected_before, reach) & then
-    return shift_mask(standing, 0, -step)
-
-
 #: The top of the observed material is an edge of the frame unless the frame changes across it by less than
 #: this share of what the background frame changes by there, and by no more than noise (edge_in_the_frame).
 #: Where the hotend's mirror image in a glass bed is hidden by a black part (cross-check seed 5 010_normal)
@@ -1416,13 +1377,6 @@ def check_shape(
     # part, attached to it; pipeline.decide weighs it over the cameras
     new_outside = None
     if seen_before is not None:
-        # the part seen at the previous check has risen with the model since: its top standing a few px above a
-        # misplaced outline at the last two looks stands as far above it now, and that is no new material
-        older = next(((mask[crop], shift_mask(silhouette[crop].astype(bool), dx, dy))
-                      for mask, silhouette in older_looks[:1]
-                      if mask is not None and mask.shape == (h, w) and silhouette is not None), None)
-        risen = (risen_with_the_part(seen_before, before_a, expected_a, shift_bound + tol, older, tol)
-                 if rise_readable else None)
         new_outside = new_material(observed, seen_before, expected_a, search_a, tol, regions.px_per_mm,
                                    ignore=reflection_a, marks=dont_care_a, linked=~evidence.bed,
                                    bed_to_image=regions.bed_to_image, not_the_prints=not_part_colour,
@@ -1431,7 +1385,7 @@ def check_shape(
                                    foreign=(comparison.foreign if comparison.foreign is not None
                                             and (followed_before is None or not followed_before.any())
                                             else None),
-                                   part_in_place=comparison.part_in_place, explained=risen)
+                                   part_in_place=comparison.part_in_place)
 
     reasons: list[str] = []
     decisive = False

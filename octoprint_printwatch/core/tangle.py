@@ -88,7 +88,6 @@ def new_material(
     not_the_prints: Callable[[np.ndarray], np.ndarray] | None = None,
     foreign: np.ndarray | None = None,
     part_in_place: bool = False,
-    explained: np.ndarray | None = None,
 ) -> NewMaterial | None:
     """Material seen now and not at the previous check, outside the expected part and attached to it.
 
@@ -117,9 +116,6 @@ def new_material(
         (the same pixels: ``new`` lies in ``observed``). None: searched here.
     part_in_place : the part stands where it belongs (compare_masks' Comparison.part_in_place): objects are then
         taken apart from a ring around its outline before they are searched, as compare_masks does.
-    explained : (h, w) bool or None, material the part's own growth explains (check_shape: its top standing above a
-        misplaced outline at the last two looks, risen with the model since); like ``previous`` (grown by 2 px) it is
-        never counted, but a blob it joins to the part is still attached to it.
     Returns None when the test cannot be made (no scale, no previous mask, empty expected part).
     """
     if px_per_mm <= 0 or previous is None or previous.shape != observed.shape or not expected.any():
@@ -170,8 +166,6 @@ def new_material(
         inside = np.bincount(ids, weights=marks[ys, xs], minlength=count)
         at_foot = keep & (inside >= 0.8 * np.maximum(area, 1))
         keep &= ~at_foot
-    if explained is not None and explained.any():
-        far = far & ~dilate(explained, 2)
     counted = keep[labels] & far
     pixels = int(counted.sum())
     foot_pixels = int(np.count_nonzero(at_foot[labels] & far)) if at_foot.any() else 0
