@@ -81,6 +81,9 @@ KNOWN = [
           ["--out", "/tmp/printwatch-crosscheck-seed1", "--count", "60", "--seed", "1", "--jobs", "2"],
           ["--out", "/tmp/printwatch-crosscheck-quick", "--count", "10", "--seed", "1", "--jobs", "2"], False,
           "Second simulator (cross-check)"),
+    Bench("perturb", "bench_perturb.py", ["--phase", "pre"],
+          ["--phase", "pre", "--only", "normal_0", "--perturb", "jpeg35,cast"], False,
+          "Perturbed recordings (webcam and rendering differences)"),
 ]
 
 
