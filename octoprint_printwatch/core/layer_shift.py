@@ -641,19 +641,19 @@ def with_history(shift: LayerShift | None,
     return shift
 
 
-def _was_there(shift: LayerShift | None) -> bool:
-    return shift is not None and shift.confirmed >= SHIFT_WAS_NOT_THERE
+def _was_there(shift: LayerShift | None, sure: bool = False) -> bool:
+    return shift is not None and (shift.confirmed_sure if sure else shift.confirmed) >= SHIFT_WAS_NOT_THERE
 
 
 def _confirms(shift: LayerShift, min_mm: float, several_share: float, one_view_share: float,
-              sure: bool = False) -> bool:
+              sure: bool = False, straddles_onset: bool = False) -> bool:
     several = shift.viewpoints >= 2
     share = shift.confirmed_sure if sure else shift.confirmed
     return (bool(shift.cameras) and shift.magnitude_mm >= min_mm
             and shift.support >= (SHIFT_MIN_SUPPORT_PX if several else SHIFT_MIN_SUPPORT_ONE_VIEW_PX)
             and share >= (several_share if several else one_view_share)
             and (not sure or shift.overhang >= SHIFT_OVERHANG_SHARE * shift.support)
-            and shift.against <= SHIFT_AGAINST * shift.support
+            and (straddles_onset or shift.against <= SHIFT_AGAINST * shift.support)
             and (shift.score >= SHIFT_OVER_NULL * shift.null_score or beats_null_apart(shift)))
 
 
@@ -693,10 +693,18 @@ def persists(shift: LayerShift, min_mm: float) -> bool:
     """Whether the shift is new and seen at two consecutive checks: confirmed now and in the previous
     check's views by SHIFT_PERSISTS_CONFIRMED (one view: ..._ONE_VIEW, the other rules as
     :func:`confirms_layer_shift`), and by less than SHIFT_WAS_NOT_THERE at the check before them (all three
-    checks testing their own band; see :func:`with_history`)."""
-    return (len(shift.before) >= 2 and shift.before[0] is not None and not _was_there(shift.before[1])
-            and _confirms(shift, min_mm, SHIFT_PERSISTS_CONFIRMED, SHIFT_PERSISTS_CONFIRMED_ONE_VIEW)
-            and _confirms(shift.before[0], min_mm, SHIFT_PERSISTS_CONFIRMED, SHIFT_PERSISTS_CONFIRMED_ONE_VIEW))
+    checks testing their own band; see :func:`with_history`). Counted over every pixel the shift changes or,
+    as at one check (:func:`_confirms_new`: an overhang on one side only), over the decided ones at all three
+    checks: the blurred rim along the moved band's outline is no evidence at two checks either."""
+    return _persists_over(shift, min_mm, sure=False) or (_one_sided(shift) and _persists_over(shift, min_mm, sure=True))
+
+
+def _persists_over(shift: LayerShift, min_mm: float, sure: bool) -> bool:
+    """:func:`persists` with every share counted over all the pixels the shift changes, or (``sure``) the decided ones."""
+    return (len(shift.before) >= 2 and shift.before[0] is not None and not _was_there(shift.before[1], sure)
+            and _confirms(shift, min_mm, SHIFT_PERSISTS_CONFIRMED, SHIFT_PERSISTS_CONFIRMED_ONE_VIEW, sure=sure)
+            and _confirms(shift.before[0], min_mm, SHIFT_PERSISTS_CONFIRMED, SHIFT_PERSISTS_CONFIRMED_ONE_VIEW,
+                          sure=sure, straddles_onset=True))
 
 
 def was_there_before(shift: LayerShift) -> bool:
@@ -734,11 +742,15 @@ def confirms_layer_shift(shift: LayerShift, min_mm: float) -> bool:
 def describe_layer_shift(shift: LayerShift) -> str:
     """One line for the user: how far, which way, seen by whom."""
     dx, dy = (float(v) for v in shift.shift_mm)
-    twice = (f", and {shift.previous.confirmed:.0%} at the previous check"
-             if shift.previous is not None and persists(shift, 0.0) else "")
     share = f"{shift.confirmed:.0%} of the evidence"
+    twice = ""
+    if shift.previous is not None and _persists_over(shift, 0.0, sure=False):
+        twice = f", and {shift.previous.confirmed:.0%} at the previous check"
+    elif shift.previous is not None and persists(shift, 0.0):
+        share = f"{shift.confirmed_sure:.0%} of the clear evidence"
+        twice = f", and {shift.previous.confirmed_sure:.0%} at the previous check"
     if not _confirms(shift, 0.0, SHIFT_CONFIRMED, SHIFT_CONFIRMED_ONE_VIEW) and _confirms_new(shift, 0.0):
-        share = f"{shift.confirmed_sure:.0%} of the clear evidence, new since the previous check"
+        share, twice = f"{shift.confirmed_sure:.0%} of the clear evidence, new since the previous check", ""
     return (f"the newest layers sit {shift.magnitude_mm:.1f} mm sideways on the layers below "
             f"(X {dx:+.1f} mm, Y {dy:+.1f} mm), confirmed by {', '.join(sorted(shift.cameras))}"
             f" ({share}{twice}): layer shift?")
