@@ -693,7 +693,9 @@ def persists(shift: LayerShift, min_mm: float) -> bool:
     """Whether the shift is new and seen at two consecutive checks: confirmed now and in the previous
     check's views by SHIFT_PERSISTS_CONFIRMED (one view: ..._ONE_VIEW, the other rules as
     :func:`confirms_layer_shift`), and by less than SHIFT_WAS_NOT_THERE at the check before them (all three
-    checks testing their own band; see :func:`with_history`). Counted over every pixel the shift changes or,
+    checks testing their own band; see :func:`with_history`). The previous check's contradicting pixels are not held to
+    SHIFT_AGAINST: its band is usually the one the shift began in, whose layers printed in place below the onset
+    contradict it where the moved band uncovers them (its share bounds them). Counted over every pixel the shift changes or,
     as at one check (:func:`_confirms_new`: an overhang on one side only), over the decided ones at all three
     checks: the blurred rim along the moved band's outline is no evidence at two checks either."""
     return _persists_over(shift, min_mm, sure=False) or (_one_sided(shift) and _persists_over(shift, min_mm, sure=True))
