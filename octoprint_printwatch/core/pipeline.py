@@ -732,7 +732,9 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
                                         if r.new_outside is not None},
                             # (not where a top surface closes: a ridge's or apex's last layers are too thin
                             # for the outline to show them rise, so a normal part reads 0 % there)
-                            rise_pct=rise_pct)
+                            rise_pct=rise_pct,
+                            surrounding={cam for cam, r in usable.items()
+                                         if r.new_outside is not None and r.new_outside.surrounds_part})
     if tangle is not None:
         fail_reasons.append(tangle)
         shape_fail = True

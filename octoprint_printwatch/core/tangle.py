@@ -25,7 +25,7 @@ any frame size and camera distance.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable, Mapping
+from typing import Callable, Collection, Mapping
 
 import cv2
 import numpy as np
@@ -52,6 +52,9 @@ class NewMaterial:
     direction : radians, the bed direction the camera's image x follows at the part: which side the camera
         looks from (the two cameras of a stereo pair share it, opposite cameras differ by pi); None when
         unknown.
+    arc_deg : degrees of the circle around the part's image centre that the new attached material at the foot (the
+        blobs of ``at_foot_mm2``) spans: 360 less the widest gap of sectors (``ARC_SECTORS``) holding under
+        ``SECTOR_MIN_MM2``.
     """
 
     area_mm2: float
@@ -60,6 +63,7 @@ class NewMaterial:
     mask: np.ndarray | None = field(default=None, repr=False)
     at_foot_mm2: float = 0.0
     direction: float | None = None
+    arc_deg: float = 0.0
 
     @property
     def with_foot_mm2(self) -> float:
@@ -68,7 +72,40 @@ class NewMaterial:
 
     def figures(self) -> dict:
         return {"new_outside_mm2": round(self.area_mm2, 1), "new_outside_blobs": self.blobs,
-                "new_at_foot_mm2": round(self.at_foot_mm2, 1)}
+                "new_at_foot_mm2": round(self.at_foot_mm2, 1), "new_arc_deg": round(self.arc_deg)}
+
+    @property
+    def surrounds_part(self) -> bool:
+        """The new material at the foot lies on more than half the circle around the part (no empty half circle)."""
+        return self.arc_deg > SURROUNDS_ARC_DEG
+
+
+#: Sectors the circle around the part's image centre is cut into to read how far around it new material lies.
+ARC_SECTORS = 8
+#: A sector holds new material when at least this much of it (mm^2 at the part) lies there: a strand's root
+#: 0.4 mm wide and a few mm long; specks of a flickering edge hold less.
+SECTOR_MIN_MM2 = 1.0
+#: New material spanning more than this arc around the part surrounds it (see :func:`loose_material`).
+SURROUNDS_ARC_DEG = 180.0
+
+
+def arc_around(material: np.ndarray, expected: np.ndarray, scale_mm2: float) -> float:
+    """Degrees of the circle around ``expected``'s centre that ``material`` spans (sectors holding
+    ``SECTOR_MIN_MM2`` each; 360 less the widest run of sectors holding less)."""
+    ys, xs = np.nonzero(material)
+    if not len(ys):
+        return 0.0
+    ey, ex = np.nonzero(expected)
+    angle = np.arctan2(ys - ey.mean(), xs - ex.mean())
+    sector = ((angle + np.pi) / (2.0 * np.pi) * ARC_SECTORS).astype(int) % ARC_SECTORS
+    held = np.bincount(sector, minlength=ARC_SECTORS) * scale_mm2 >= SECTOR_MIN_MM2
+    if not held.any():
+        return 0.0
+    gap = run = 0
+    for h in np.concatenate([held, held]):   # (twice round: a gap may wrap past sector 0)
+        run = 0 if h else run + 1
+        gap = max(gap, run)
+    return 360.0 * (1.0 - min(gap, ARC_SECTORS) / ARC_SECTORS)
 
 
 def new_material(
@@ -168,10 +205,14 @@ def new_material(
         keep &= ~at_foot
     counted = keep[labels] & far
     pixels = int(counted.sum())
-    foot_pixels = int(np.count_nonzero(at_foot[labels] & far)) if at_foot.any() else 0
+    foot = at_foot[labels] & far
+    foot_pixels = int(np.count_nonzero(foot)) if at_foot.any() else 0
     blobs = int(len(np.unique(labels[counted]))) if pixels else 0
     scale = 1.0 / (px_per_mm * px_per_mm)
-    return NewMaterial(pixels * scale, pixels, blobs, counted, at_foot_mm2=foot_pixels * scale, direction=direction)
+    return NewMaterial(pixels * scale, pixels, blobs, counted, at_foot_mm2=foot_pixels * scale, direction=direction,
+                       # (the loops at the foot alone: what lies beyond the zone counts already, and a glass bed's
+                       # mirror image of a growing part spreads below it over half the circle, s7 021_detach)
+                       arc_deg=arc_around(foot, expected, scale))
 
 
 #: New material (mm^2 at the part) that fails the print when two views see at least this much each...
@@ -195,7 +236,7 @@ def viewpoints(directions: Mapping[str, float | None]) -> int:
 def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = TWO_VIEWS_MM2,
                    one_view_mm2: float = ONE_VIEW_MM2, with_foot: Mapping[str, float | None] | None = None,
                    directions: Mapping[str, float | None] | None = None,
-                   rise_pct: float | None = None) -> str | None:
+                   rise_pct: float | None = None, surrounding: Collection[str] = ()) -> str | None:
     """The reason to pause for loose material piling up around the part, or None.
 
     ``areas`` maps every usable camera to its :attr:`NewMaterial.area_mm2` (None: not measured). A tangle
@@ -219,6 +260,12 @@ def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = 
     misplaced outline, a flickering skirt line) comes with a part that keeps rising. Other views of a tangle
     often see no strands beyond the outline (they hang inside it, or over what was seen before): the growth
     test is the second witness.
+
+    ``surrounding``: the cameras whose new material lies around the part on more than half the circle
+    (:attr:`NewMaterial.surrounds_part`). Such a view, seeing ``one_view_mm2`` (the zone's blobs included),
+    counts as two sides: loops drape down every side of the
+    part and spread over the bed around its foot, while what one view reads on a normal print lies on one side
+    of it (its cast shadow, a glare line on a glossy bed, its own side beyond a misplaced outline).
     """
     seen = {cam: a for cam, a in areas.items() if a is not None and a >= two_views_mm2}
     slowed = ""
@@ -226,7 +273,11 @@ def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = 
         seen = {cam: a for cam, a in {**areas, **(with_foot or {})}.items() if a is not None and a >= two_views_mm2}
         if not seen:
             return None
-        if viewpoints({cam: (directions or {}).get(cam) for cam in seen}) < 2:
+        # (as much as a lone camera must see: a brim of the part's colour, new in one view, also lies around it)
+        around = sorted(cam for cam, a in seen.items() if cam in surrounding and a >= one_view_mm2)
+        if around:
+            slowed = f" on more than half the circle around the part in {', '.join(around)}"
+        elif viewpoints({cam: (directions or {}).get(cam) for cam in seen}) < 2:
             if rise_pct is None or rise_pct >= SLOWED_RISE_PCT:
                 return None
             slowed = f" while the part rose {rise_pct:.0f}% of the expected height"
