@@ -2,9 +2,7 @@
 and a data folder that never mixes two sets of conditions (the hostile hold-out sets depend on them)."""
 from __future__ import annotations
 
-import importlib.util
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -14,14 +12,8 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="module")
-def bench():
-    spec = importlib.util.spec_from_file_location("_bench_detection_under_test",
-                                                  ROOT / "benchmarks" / "bench_detection.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    yield module
-    sys.modules.pop(spec.name, None)
+def bench(load_benchmark):
+    yield from load_benchmark("bench_detection")
 
 
 def test_a_larger_frame_keeps_the_field_of_view_and_scales_the_image(bench):

@@ -2,10 +2,8 @@
 gamma, ...) are copies, the originals untouched, and their outcomes are scored as bench_detection scores them."""
 from __future__ import annotations
 
-import importlib.util
 import json
 import shutil
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -16,13 +14,8 @@ RECORDING = ROOT / "tests" / "data" / "recordings" / "cube_black_pei_shadow"
 
 
 @pytest.fixture(scope="module")
-def bench():
-    spec = importlib.util.spec_from_file_location("_bench_perturb_under_test", ROOT / "benchmarks" / "bench_perturb.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    yield module
-    sys.modules.pop(spec.name, None)
+def bench(load_benchmark):
+    yield from load_benchmark("bench_perturb")
 
 
 def test_a_normal_print_paused_and_a_failure_caught_late_are_scored(bench):
