@@ -315,10 +315,7 @@ def _rods_among(objects: np.ndarray, search: np.ndarray, outline: np.ndarray, pa
     h, w = objects.shape
     behind = []     # the lines of the rods that run on behind the part
     for index in np.flatnonzero(candidates):
-        x0, y0 = stats[index, cv2.CC_STAT_LEFT], stats[index, cv2.CC_STAT_TOP]
-        x1, y1 = x0 + stats[index, cv2.CC_STAT_WIDTH], y0 + stats[index, cv2.CC_STAT_HEIGHT]
-        ys, xs = np.nonzero(labels[y0:y1, x0:x1] == index)
-        ys, xs = ys + y0, xs + x0
+        ys, xs = _blob_pixels(labels, stats, index)
         at_edge = (xs == 0) | (ys == 0) | (xs == w - 1) | (ys == h - 1)
         line = _rod_line(xs.astype(np.float64), ys.astype(np.float64), at_part[ys, xs], search[ys, xs],
                          part_in_place, at_edge)
@@ -328,7 +325,7 @@ def _rods_among(objects: np.ndarray, search: np.ndarray, outline: np.ndarray, pa
         if part_end:
             behind.append((centre, direction, normal, last if part_end > 0 else first, part_end, half_width))
         # the strip along the line, over the blob's length and the ring at its ends
-        by0, by1, bx0, bx1 = max(0, y0 - 6), min(h, y1 + 6), max(0, x0 - 6), min(w, x1 + 6)
+        by0, by1, bx0, bx1 = max(0, ys.min() - 6), min(h, ys.max() + 7), max(0, xs.min() - 6), min(w, xs.max() + 7)
         gy, gx = np.mgrid[by0:by1, bx0:bx1]
         along = (gx - centre[0]) * direction[0] + (gy - centre[1]) * direction[1]
         across = (gx - centre[0]) * normal[0] + (gy - centre[1]) * normal[1]
@@ -337,6 +334,14 @@ def _rods_among(objects: np.ndarray, search: np.ndarray, outline: np.ndarray, pa
     if behind:
         out |= _rods_come_out(labels, stats, at_part, behind) & ~out
     return out
+
+
+def _blob_pixels(labels: np.ndarray, stats: np.ndarray, index: int) -> tuple[np.ndarray, np.ndarray]:
+    """(ys, xs) of blob ``index`` of cv2.connectedComponentsWithStats' ``labels``, read within its bounding box."""
+    x0, y0 = stats[index, cv2.CC_STAT_LEFT], stats[index, cv2.CC_STAT_TOP]
+    x1, y1 = x0 + stats[index, cv2.CC_STAT_WIDTH], y0 + stats[index, cv2.CC_STAT_HEIGHT]
+    ys, xs = np.nonzero(labels[y0:y1, x0:x1] == index)
+    return ys + y0, xs + x0
 
 
 def _rods_come_out(labels: np.ndarray, stats: np.ndarray, at_part: np.ndarray, behind: list) -> np.ndarray:
@@ -348,10 +353,7 @@ def _rods_come_out(labels: np.ndarray, stats: np.ndarray, at_part: np.ndarray, b
     for index in range(1, len(stats)):
         if stats[index, cv2.CC_STAT_AREA] < 30:
             continue
-        x0, y0 = stats[index, cv2.CC_STAT_LEFT], stats[index, cv2.CC_STAT_TOP]
-        x1, y1 = x0 + stats[index, cv2.CC_STAT_WIDTH], y0 + stats[index, cv2.CC_STAT_HEIGHT]
-        ys, xs = np.nonzero(labels[y0:y1, x0:x1] == index)
-        ys, xs = ys + y0, xs + x0
+        ys, xs = _blob_pixels(labels, stats, index)
         if not at_part[ys, xs].any():
             continue
         for origin, direction, normal, end, side, half_width in behind:

@@ -220,23 +220,30 @@ def test_part_palette_gathers_the_same_pixels():
             assert fast.dtype == plain.dtype and np.array_equal(fast, plain), trial
 
 
+def _random_scene(rng, max_size: int, search_margin: int, max_objects: int, max_height: int):
+    """A random part (a box in the lower half), its search box (``search_margin`` px in from the sides), the
+    observed material (the part, 3 % of it lost, with hanging objects, strands and blobs) and the linked pixels
+    (observed plus 5 % noise) -> (h, w, the part's top row, expected, search, observed, linked)."""
+    h, w = (int(v) for v in rng.integers(80, max_size, size=2))
+    expected = np.zeros((h, w), bool)
+    ey0, ex0 = int(rng.integers(h // 3, h // 2)), int(rng.integers(w // 4, w // 2))
+    expected[ey0:ey0 + h // 3, ex0:ex0 + w // 4] = True
+    search = np.zeros((h, w), bool)
+    search[int(rng.integers(5, ey0)):, search_margin:w - search_margin] = True
+    observed = expected & (rng.random((h, w)) < 0.97)
+    for _ in range(int(rng.integers(1, max_objects))):
+        y, x = int(rng.integers(0, h - 3)), int(rng.integers(0, w - 3))
+        observed[y:y + int(rng.integers(2, max_height)), x:x + int(rng.integers(2, 30))] = True
+    return h, w, ey0, expected, search, observed, observed | (rng.random((h, w)) < 0.05)
+
+
 def test_new_material_with_compare_masks_objects_from_above_is_new_material_alone():
     """new_material(..., foreign=compare_masks(...).foreign) == new_material(...) when no objects of a
     previous check are followed (random parts, hanging objects, strands)."""
     rng = np.random.default_rng(11)
     counted = 0
     for trial in range(200):
-        h, w = (int(v) for v in rng.integers(80, 200, size=2))
-        expected = np.zeros((h, w), bool)
-        ey0, ex0 = int(rng.integers(h // 3, h // 2)), int(rng.integers(w // 4, w // 2))
-        expected[ey0:ey0 + h // 3, ex0:ex0 + w // 4] = True
-        search = np.zeros((h, w), bool)
-        search[int(rng.integers(5, ey0)):, :] = True
-        observed = expected & (rng.random((h, w)) < 0.97)
-        for _ in range(int(rng.integers(1, 8))):   # hanging objects, strands, blobs
-            y, x = int(rng.integers(0, h - 3)), int(rng.integers(0, w - 3))
-            observed[y:y + int(rng.integers(2, 40)), x:x + int(rng.integers(2, 30))] = True
-        linked = observed | (rng.random((h, w)) < 0.05)
+        h, w, ey0, expected, search, observed, linked = _random_scene(rng, 200, 0, 8, 40)
         previous = expected | (rng.random((h, w)) < 0.01)
         bed = ~linked
         band = expected & (np.arange(h)[:, None] < ey0 + 5)
@@ -327,17 +334,7 @@ def test_objects_from_above_are_those_read_with_connected_component_statistics(m
         rng = np.random.default_rng(23)
         out = []
         for trial in range(120):
-            h, w = (int(v) for v in rng.integers(80, 180, size=2))
-            expected = np.zeros((h, w), bool)
-            ey0, ex0 = int(rng.integers(h // 3, h // 2)), int(rng.integers(w // 4, w // 2))
-            expected[ey0:ey0 + h // 3, ex0:ex0 + w // 4] = True
-            search = np.zeros((h, w), bool)
-            search[int(rng.integers(5, ey0)):, 3:-3] = True
-            observed = expected & (rng.random((h, w)) < 0.97)
-            for _ in range(int(rng.integers(1, 9))):   # hanging objects, strands, blobs
-                y, x = int(rng.integers(0, h - 3)), int(rng.integers(0, w - 3))
-                observed[y:y + int(rng.integers(2, 60)), x:x + int(rng.integers(2, 30))] = True
-            linked = observed | (rng.random((h, w)) < 0.05)
+            h, w, ey0, expected, search, observed, linked = _random_scene(rng, 180, 3, 9, 60)
             before = np.roll(observed & ~expected, int(rng.integers(-3, 4)), axis=0) if trial % 2 else None
             tol = float(rng.choice([1.0, 2.0, 3.0]))
             foreign = masks.reaching_in_from_above(linked & ~expected, search, expected, material=observed & ~expected,
