@@ -604,7 +604,7 @@ def machine() -> str:
 
 def library_versions() -> str:
     """The versions of the libraries the detector's figures depend on: the same recordings gave other verdicts
-    under another OpenCV / NumPy / trimesh (docs/detection.md, ninth session)."""
+    under another OpenCV / NumPy / trimesh (docs/detection-log.md, ninth session)."""
     from importlib.metadata import PackageNotFoundError, version
     found = []
     for name in ("numpy", "opencv-python-headless", "trimesh", "manifold3d", "scipy"):

@@ -733,7 +733,7 @@ def confirms_layer_shift(shift: LayerShift, min_mm: float) -> bool:
     the decided pixels, see SHIFT_OVERHANG_SHARE and SHIFT_OPPOSITE_MAX), or new and seen at two checks
     (:func:`persists`), and not there all along (:func:`was_there_before`, :func:`there_since_first_check`).
 
-    The thresholds are shares of pixels (scale-free); see docs/detection.md for what they were
+    The thresholds are shares of pixels (scale-free); see docs/detection-log.md for what they were
     measured on.
     """
     return ((_confirms(shift, min_mm, SHIFT_CONFIRMED, SHIFT_CONFIRMED_ONE_VIEW) or _confirms_new(shift, min_mm)
