@@ -74,6 +74,19 @@ def shift_mask(mask: np.ndarray, dx: int, dy: int) -> np.ndarray:
     return out
 
 
+def shifted_union(mask: np.ndarray, shifts: np.ndarray) -> np.ndarray:
+    """(h, w) bool: the union of ``mask`` moved by each of ``shifts`` ((k, 2) int (dx, dy)), zeros shifted in."""
+    shifts = np.asarray(shifts, int).reshape(-1, 2)
+    if not len(shifts):
+        return np.zeros(mask.shape, bool)
+    r = int(np.abs(shifts).max())
+    # one dilation whose kernel holds the shifts mirrored (cv2.dilate reads src at x + k - anchor)
+    kernel = np.zeros((2 * r + 1, 2 * r + 1), np.uint8)
+    kernel[r - shifts[:, 1], r - shifts[:, 0]] = 1
+    padded = cv2.copyMakeBorder(mask.astype(np.uint8), r, r, r, r, cv2.BORDER_CONSTANT, value=0)
+    return cv2.dilate(padded, kernel, anchor=(r, r))[r:-r or None, r:-r or None].astype(bool)
+
+
 def bounding_box(mask: np.ndarray, pad: int = 0) -> tuple[int, int, int, int] | None:
     """(y0, y1, x0, x1) half-open box around the True pixels, padded and clipped; None if empty."""
     rows = np.flatnonzero(mask.any(axis=1))

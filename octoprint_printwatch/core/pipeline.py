@@ -821,6 +821,8 @@ class CameraState:
     frozen: bool = False
     #: (k, 2) shifts no passing check so far could tell apart (each narrows them; _second_look)
     shift_candidates: np.ndarray | None = None
+    #: the (dx, dy) px its passing checks aligned the outline at (each once; its reflection zone covers them)
+    placed_at: list = field(default_factory=list)
     #: the part's colours, from its last passing check
     palette: np.ndarray | None = None
     #: (h, w) bool observed mask of its last passing check (background removal's prior)
@@ -975,6 +977,7 @@ class CheckRunner:
                 # (where one check's rise is too small to read, the growth test reads it against an older look)
                 older_looks=[(mask, self.plan.view(name, zz).silhouette) for zz, mask in state.older_observed
                              if self.previous_z is not None and zz < self.previous_z],
+                placed_at=tuple(state.placed_at),
             )
             result = check_shape(**shape_args, candidates=state.shift_candidates, track_candidates=True)
             result = not_decisive_where_calibrated(result, shape_args)
@@ -994,6 +997,8 @@ class CheckRunner:
                 state.shift_candidates = result.shift_candidates
             if result.usable and result.passed:
                 state.previous_mask = result.observed_mask
+                if result.shift_px not in state.placed_at:
+                    state.placed_at.append(result.shift_px)
                 # Calibration error does not change during a print: once the part is tall enough in
                 # this view for the alignment to be unambiguous, later checks stay near that shift
                 # (and a runout cannot walk the expected outline down, check by check).
@@ -1181,6 +1186,7 @@ class CheckRunner:
         result at this check (updates ``shape`` and ``errors``)."""
         state = self.cameras[name]
         state.calibration_offset = state.anchor = probe.shift_px
+        state.placed_at = [probe.shift_px]   # (the earlier places lay within the old reach: not where the part is)
         # held there: the alignment's prior, centred on the stated calibration, would walk it back
         state.frozen = True
         probe.reasons.append(reason)

@@ -44,8 +44,8 @@ from .tangle import NewMaterial, new_material
 from .nest import STALL_READ_BELOW_GROWTH_PCT, part_coverage, region_texture
 from .shadows import shade_of_clipped_bed, shadow_left
 from .masks import (around, bounding_box, components, dilate, disk, erode, outline_zone,  # noqa: F401  (re-exported)
-                    reaching_in_from_above, shift_mask, crossing_the_box, mirror_match, MIRROR_MATCH_SHARE,
-                    PART_IN_PLACE_MAX_MISSING, PART_IN_PLACE_MIN_SEEN)
+                    reaching_in_from_above, shift_mask, shifted_union, crossing_the_box, mirror_match,
+                    MIRROR_MATCH_SHARE, PART_IN_PLACE_MAX_MISSING, PART_IN_PLACE_MIN_SEEN)
 
 #: Shadows keep at least this fraction of the bed's brightness; darker than that is material anywhere.
 SHADOW_MIN_RATIO = 0.35
@@ -123,6 +123,7 @@ class Evidence:
     changed_bed_fraction: float
     background_norm: np.ndarray | None = None   # (h, w, 3) float32, the background at the frame's exposure
     frame_gradient: np.ndarray | None = None   # (h, w) float32, the frame's luma gradient (:func:`_gradient`)
+    new_edges: np.ndarray | None = None   # (h, w) float32, edges the background has not, in units of their bed noise
 
 
 @dataclass
@@ -407,7 +408,7 @@ def material_evidence(
                   | (dark.ravel()[sample] > _CHANGED_LEVELS))
     changed = float(np.mean(changed_px)) if sample.size else 0.0
     return Evidence(material=material, strong=strong_material, bed=bed, score=score, noise=noise, gains=gains,
-                    background_norm=bg, frame_gradient=grad_f,
+                    background_norm=bg, frame_gradient=grad_f, new_edges=z["texture"],
                     changed_bed_fraction=changed)
 
 
@@ -677,6 +678,74 @@ def align_expected(
     return int(dxs[iy, ix]), int(dys[iy, ix])
 
 
+#: A look without an anchor lays the expected outline on the frame's new edges (edges the background frame
+#: has not: the part's rim against the bed or against its own brim) rather than where the material overlaps it
+#: best, where the overlap cannot tell where the part is: the shifts within PLATEAU_SHARE of its best overlap
+#: span at least this share of the alignment bound (a brim or skirt of the part's colour around the part, or a
+#: part seen only in part: the outline fits equally well over much of it). Measured at first looks: default
+#: normal_05 (orange vase, orange brim, gold bed, top view) 27-32 px of a 30-px bound, normal_14 under gamma 1.25
+#: 32 px; where the overlap placed the part within a few px (seed 10 001_normal s1R, 029_detach s1: 8 px), the
+#: edges of a part's lit faces can fit the outline better 8-13 px off, so there they decide nothing.
+OUTLINE_AMBIGUOUS_SHARE = 0.5
+
+#: ... and where the outline is distinct there: its mean edge strength (in units of the bed's edge noise) is over
+#: the bed factor (what is confidently not the bed) and this many times the 90th percentile over every shift
+#: searched (the frame's own edges: grain, JPEG, sensor noise). Measured: normal_05's first look 4.4 at (-1, -5) px (the true calibration error: -1, -4), the 90th
+#: percentile 1.0, the overlap's choice 0.5 at (-15, 3); under noise, sharpening and a colour cast the overlap chose
+#: (-15, 13), (0, 9), (-16, 6) and the edges (-1, -5); normal_14 under gamma 1.25: 9.9 at (-4, -6) (true -2.5,
+#: -7.4), 4.7, the overlap's choice 2.3 at (17, 10). Edges within the noise (seed 10 037_detach: 0.5-2) decide
+#: nothing.
+OUTLINE_EDGE_DISTINCT = 2.0
+
+#: ... and where the overlap's choice lies off the frame's edges: at most this share of the outline's edge strength.
+#: Measured: normal_05 0.11, normal_14 under gamma 1.25 0.23, against 0.41-0.47 where the overlap's choice was
+#: right or nearer the truth and a brim's or a lit face's edges parallel to the outline fit it better 10 px off
+#: (seed 11 050_spaghetti s0L, side view of a white part with a brim: 12.0 at (-17, 9), true (-5.4, 6.2)).
+OUTLINE_CHOICE_OFF_EDGES = 1.0 / 3.0
+
+#: ... and only where the material still covers the outline there nearly as well: at most this share of the
+#: template's area less overlap (less the shift prior; the vase above: 1-9 %)
+OUTLINE_OVERLAP_LOSS = 0.15
+
+
+def outline_on_edges(edges: np.ndarray, silhouette: np.ndarray, observed: np.ndarray, template: np.ndarray,
+                     max_shift: int, chosen: tuple[int, int], least_edge: float) -> tuple[int, int] | None:
+    """The shift (dx, dy) that lays the outline of ``silhouette`` on ``edges`` ((h, w) float32, the frame's new
+    edges in noise units) instead of ``chosen`` (:func:`align_expected`'s shift of ``template`` onto
+    ``observed``, all (h, w) bool, within ``max_shift``), or None where the overlap can tell the part's place
+    (:data:`OUTLINE_AMBIGUOUS_SHARE`), the outline's edges are not distinct or fainter than ``least_edge`` (noise
+    units), or the overlap clearly prefers ``chosen`` (:data:`OUTLINE_EDGE_DISTINCT`, :data:`OUTLINE_OVERLAP_LOSS`).
+    """
+    ring = silhouette & ~erode(silhouette, 1)
+    ring_box, box = bounding_box(ring), bounding_box(template)
+    s = int(max_shift)
+    # a look that sees no material keeps the calibrated place (as align_expected does): edges alone can be
+    # anything (seed 7 039_layer_shift's first usable look, on a part in the bed's colour: 2.6 noise units, 4-6 px off)
+    if ring_box is None or box is None or s <= 0 or abs(chosen[0]) > s or abs(chosen[1]) > s or not observed.any():
+        return None
+    y0, y1, x0, x1 = box
+    area = float(template[y0:y1, x0:x1].sum())
+    overlap = _overlap_map(around(observed, box, s, s), template[y0:y1, x0:x1].astype(np.float32), s)
+    dys, dxs = np.mgrid[-s: s + 1, -s: s + 1]
+    allowed = dxs * dxs + dys * dys <= s * s
+    fits = allowed & (overlap >= float(overlap[allowed].max()) - PLATEAU_SHARE * area)
+    if max(np.ptp(dxs[fits]), np.ptp(dys[fits])) < OUTLINE_AMBIGUOUS_SHARE * s:
+        return None
+    y0, y1, x0, x1 = ring_box
+    outline = ring[y0:y1, x0:x1].astype(np.float32)
+    strength = cv2.matchTemplate(around(edges.astype(np.float32), ring_box, s, s), outline, cv2.TM_CCORR)
+    strength /= float(outline.sum())
+    iy, ix = np.unravel_index(int(np.argmax(np.where(allowed, strength, -np.inf))), strength.shape)
+    best = float(strength[iy, ix])
+    score = overlap - _shift_prior(dxs, dys, s, area)
+    cy, cx = chosen[1] + s, chosen[0] + s
+    if (best < max(least_edge, OUTLINE_EDGE_DISTINCT * float(np.percentile(strength[allowed], 90)))
+            or float(strength[cy, cx]) > OUTLINE_CHOICE_OFF_EDGES * best
+            or float(score[iy, ix]) < float(score[cy, cx]) - OUTLINE_OVERLAP_LOSS * area):
+        return None
+    return int(ix) - s, int(iy) - s
+
+
 def _overlap_map(padded: np.ndarray, template: np.ndarray, s: int) -> np.ndarray:
     """(2s+1, 2s+1) overlap of ``template`` with ``padded`` at every shift, = cv2.matchTemplate TM_CCORR.
 
@@ -706,6 +775,11 @@ PLATEAU_SHARE = 0.02
 #: check_shape aligns on the strong cues alone only where they cover this share of the expected silhouette and,
 #: once the camera has an anchor, of the template it fits there (the older part)
 STRONG_TEMPLATE_SHARE = 0.3
+
+
+def _with_shift(shifts: Sequence[tuple[int, int]], dx: int, dy: int) -> np.ndarray:
+    """(k, 2) int: ``shifts`` ((dx, dy) pairs, maybe none) and the shift (dx, dy)."""
+    return np.array([(dx, dy), *shifts], int).reshape(-1, 2)
 
 
 def align_candidates(
@@ -1153,6 +1227,7 @@ def check_shape(
     band_coverage_wanted: bool = True,
     foreign_before: np.ndarray | None = None,
     older_looks: Sequence[tuple[np.ndarray, np.ndarray]] = (),
+    placed_at: Sequence[tuple[int, int]] = (),
 ) -> ShapeResult:
     """Shape check of one camera (module docstring). Images (h, w, 3) uint8 BGR of the camera's size.
 
@@ -1171,6 +1246,8 @@ def check_shape(
     checks before the previous one, newest first: where the model's top rises too little between two checks
     for any growth reading (2-3 px: a part seen small, checks a few layers apart), the rise is read against the
     newest of them the model's top rose enough since (:data:`GROWTH_SPAN_CHECKS`; ``growth_span``).
+    ``placed_at``: the shifts (dx, dy) this camera's passing checks aligned the outline at (its reflection zone
+    covers them all).
     """
     h, w = regions.silhouette.shape
     if frame.shape[:2] != (h, w):
@@ -1239,6 +1316,16 @@ def check_shape(
     best_candidate, shift_candidates = (align_candidates(anchor_mask & prior, template, shift_bound,
                                                          candidates=candidates)
                                         if track_candidates else (None, None))
+    on_edges = (outline_on_edges(evidence.new_edges, expected, anchor_mask & prior, template, shift_bound, (dx, dy),
+                                 bed_factor)
+                if anchor is None and evidence.new_edges is not None else None)
+    if on_edges is not None:
+        # a look without an anchor, where the material fits the outline equally well over a brim of the part's
+        # colour: the frame's edges tell where the part is, and the shifts left to tell apart are those by it
+        dx, dy = on_edges
+        if track_candidates:
+            best_candidate, shift_candidates = align_candidates(anchor_mask & prior, template, shift_bound,
+                                                                candidates=np.array([on_edges]), max_drift=max_drift)
     outline_best = outline_candidate(anchor_mask & prior, expected, shift_candidates) if track_candidates else None
     expected_a = shift_mask(expected, dx, dy)
     band_a = shift_mask(band, dx, dy)
@@ -1255,6 +1342,13 @@ def check_shape(
     dont_care_a = dilate(shift_mask(dont_care, dx, dy), tol)
     reflection_a = (dilate(shift_mask(regions.reflection[crop].astype(bool), dx, dy), tol)
                     if regions.reflection is not None else None)
+    # ... but the part's mirror image in a glossy bed lies below where the part truly stands, and where this
+    # camera's passing checks placed the outline (the same calibration error) is as likely as where this one does:
+    # a flat fit (the part over its own mirror image) lets the outline walk a few px per check off the part. Extra
+    # material is held against that outline, so it is judged on all those places; the new-material and layer-shift
+    # tests compare the camera with its own previous look and keep this check's zone (strands at the foot count)
+    reflection_placed = (dilate(shifted_union(regions.reflection[crop].astype(bool), _with_shift(placed_at, dx, dy)),
+                                tol) if regions.reflection is not None else None)
 
     # missing material is claimed only where the part, had it been there, would have been told apart
     # from what the camera sees instead (a black part against a black backdrop cannot be missed)
@@ -1290,7 +1384,7 @@ def check_shape(
                        if foreign_before is not None and foreign_before.shape == (h, w) else None)
     comparison = compare_masks(observed, bed_evidence, expected_a, band_a, search_a,
                                dont_care_a, tol, band_reach=max(2 * tol, shift_bound),
-                               flat_max_px=regions.flat_max_px, reflection=reflection_a,
+                               flat_max_px=regions.flat_max_px, reflection=reflection_placed,
                                top_tolerance=tol, linked=~evidence.bed, not_the_prints=not_the_prints,
                                foreign_before=followed_before)
 

@@ -82,13 +82,13 @@ def test_a_small_shift_of_a_wide_part_is_found():
 J_ONE = [[5.0, 0.0], [0.0, -2.0]]
 
 
-def partly_hidden_shift(dx=10):
+def partly_hidden_shift(dx=10, hidden_rows=(84, 104)):
     """One camera's evidence for the band printed ``dx`` px sideways where a fifth of what the move changes
     is neither material nor bed (a top face the colour of the bed): about 0.8 confirmed, under the 0.85 one
-    view needs at one check."""
+    view needs at one check (``hidden_rows`` (82, 106): 0.74)."""
     observed = BASE.mask() | BAND.moved(dx, 0).mask()
     # (inside the part sticking out, further than the alignment tolerance from its outline)
-    hidden = Box(211, 84, 207 + dx, 104).mask()
+    hidden = Box(211, hidden_rows[0], 207 + dx, hidden_rows[1]).mask()
     found = view(observed & ~hidden, bed=~observed & ~hidden, J=J_ONE)
     return {"cam": found}
 
@@ -114,7 +114,9 @@ def test_a_shift_seen_at_two_checks_that_was_not_there_before_is_confirmed_at_a_
 
 
 def test_a_shift_seen_once_or_that_was_there_before_is_not_confirmed_at_the_lower_share():
-    once = with_history(estimate_layer_shift(partly_hidden_shift()), checks(in_place(), in_place()))
+    # new, at 0.74: seen once, the lower share of two checks is not enough (a new shift needs 0.75 at one check)
+    once = with_history(estimate_layer_shift(partly_hidden_shift(hidden_rows=(82, 106))), checks(in_place(), in_place()))
+    assert 0.70 <= once.confirmed_sure < 0.75 and is_new(once)
     assert not confirms_layer_shift(once, 1.5)
     # the same offset at three checks in a row: a calibration residual or an alignment slip, not a new move
     always = with_history(estimate_layer_shift(partly_hidden_shift()),

@@ -21,7 +21,8 @@ measured figures in ``docs/stereo.md``):
 
 It abstains (``error_pct`` None, never a pause) when the evidence is missing: a frame missing,
 the part's top outside a view or too low to measure, untrusted rectification, too few outline
-points, neither height nor width measured with both cameras agreeing.
+points, neither height nor width measured with both cameras agreeing; and when its match failed: nothing
+reconstructed at the current height while both views' upper edges stand at it.
 """
 from __future__ import annotations
 
@@ -469,6 +470,16 @@ class PairSizeCheck:
             seed_rule = False
             notes.append("nothing reconstructed at the current height, not held: both views see the part "
                          "narrower than the model (poorly seen)")
+        if seed_rule and _edges_reach(planes, z_top, tol_z):
+            # Each camera's own silhouette stands up to the current height (its upper edge on the plane of
+            # the top, the two agreeing), so the part is there: the outline stereo and the matcher failing
+            # to reconstruct it is a failed match (a top edge that does not run steeply, a poorly seen face,
+            # noise), not a measurement: no 100 % then, and say so (a height measured still counts). A print
+            # that stopped shows a low top in both views.
+            seed_rule = False
+            notes.append("nothing reconstructed at the current height, not held: both views' upper edges stand "
+                         "at it (" + ", ".join(f"{p.height_mm:.1f}" for p in planes) + " mm): the stereo match "
+                         "failed, not the print")
         if seed_rule and model_outline_in_band is not None:
             expected_points = model_outline_in_band()
             diag["model_outline_in_band"] = expected_points
@@ -513,9 +524,13 @@ class PairSizeCheck:
             # Where the tangent planes cannot measure (the part's sides are not where the model's are,
             # e.g. knocked over), a width that the outline and the matched points both find too wide
             # still counts (the shorter of the two, against the widest the model shows near this height).
+            # Not where a side's edge stood on flat material on the bed (skirt, brim, shadow): the outline and
+            # the matched points there span that material too (a blurred picture's skirt read a low part 12 %
+            # too wide), the very rows the tangent planes left out.
             both = [w for w in stereo_widths if w]
+            flat_sides = any(t.on_bed for t in tangents)
             widest = None
-            if len(both) == 2 and exp_width is not None and exp_width >= self.narrow_mm:
+            if len(both) == 2 and not flat_sides and exp_width is not None and exp_width >= self.narrow_mm:
                 widest = max(expected_width(self.mesh, z, self.direction, s.band_mm + 2.0 * tol_z) or exp_width, exp_width)
             if widest is not None and min(both) > widest + tolerance:
                 result.width_mm = min(both)
@@ -527,7 +542,7 @@ class PairSizeCheck:
             else:
                 notes.append("width not measured: the sides at this height are not seen as silhouette edges in both views"
                              + (" (a side's edge may be flat material on the bed: skirt, brim, shadow)"
-                                if any(t.on_bed for t in tangents) else ""))
+                                if flat_sides else ""))
         result.error_pct = max(terms) if terms else None
         result.abstained = not terms
         result.reason = "; ".join(notes)
@@ -843,6 +858,15 @@ class PairSizeCheck:
             result.abstained = not terms
         result.seconds = time.perf_counter() - started
         return result
+
+
+def _edges_reach(planes, z_top: float, tol_z: float) -> bool:
+    """Whether both cameras' upper edges (:func:`.tangents.plane_height`, fitting well or not) put the part's
+    top within ``tol_z`` (what the pair's calibration explains) of ``z_top`` and agree with each other."""
+    heights = [p.height_mm for p in planes]
+    if any(h is None for h in heights):
+        return False
+    return abs(heights[0] - heights[1]) <= tol_z and min(heights) >= z_top - tol_z
 
 
 def silhouette_rims(left: np.ndarray, right: np.ndarray, min_run_px: int = 3):
