@@ -500,9 +500,10 @@ def mirror_match(pixels: np.ndarray, camera, changed_at, search: np.ndarray, min
             continue
         mirrored = at[below] * np.array([1.0, 1.0, -1.0])
         projected = camera.project(mirrored)
-        # a mirrored point behind the camera projects to NaN: never inside
+        # a mirrored point behind the camera projects to NaN, one near its plane far out of int64's range:
+        # never inside either way
         projected[~np.isfinite(projected).all(axis=1)] = -1.0
-        image = np.round(projected).astype(np.int64)
+        image = np.round(np.clip(projected, -1.0, float(max(w, h)))).astype(np.int64)
         inside = (image[:, 0] >= 0) & (image[:, 0] < w) & (image[:, 1] >= 0) & (image[:, 1] < h)
         inside[inside] = ~search[image[inside, 1], image[inside, 0]]
         if inside.sum() < MIRROR_MIN_SEEN * len(points):

@@ -214,14 +214,19 @@ def test_blobs_found_to_be_something_else_count_in_no_figure():
     assert dropped.missing.sum() == counted.missing.sum()
 
 
-def test_a_blob_whose_mirror_image_falls_behind_a_steep_camera_is_scored_quietly():
+@pytest.mark.parametrize("dist", [None, (0.2, 0.1, 0.0, 0.0, 0.05), (-0.3, 0.12, 0.0, 0.0, -0.02)])
+def test_a_blob_whose_mirror_image_falls_behind_a_steep_camera_is_scored_quietly(dist):
     """A camera looking steeply down: at the farther trial distances a blob's mirror image lies behind it
-    (projected to NaN). Those points are simply not in the frame: no numpy cast warning, a share in 0-1."""
+    (projected to NaN), or, through a lens with distortion, far beyond int64's range. Those points are simply
+    not in the frame: no numpy cast warning, a share in 0-1."""
+    import dataclasses
     import warnings
     from octoprint_printwatch.core.camera import Camera
     from octoprint_printwatch.core.masks import mirror_match
     camera = Camera.look_at("top", (100.0, -60.0, 250.0), (100.0, 60.0, 0.0), width=640, height=480,
                             hfov_deg=70.0)
+    if dist is not None:
+        camera = dataclasses.replace(camera, dist=np.array(dist))
     search = np.zeros((480, 640), bool)
     search[200:300, 250:400] = True
     changed = np.ones((480, 640), bool)
