@@ -752,7 +752,8 @@ def describe_layer_shift(shift: LayerShift) -> str:
     twice = ""
     if shift.previous is not None and _persists_over(shift, 0.0, sure=False):
         twice = f", and {shift.previous.confirmed:.0%} at the previous check"
-    elif shift.previous is not None and persists(shift, 0.0):
+    elif shift.previous is not None and _one_sided(shift) and _persists_over(shift, 0.0, sure=True):
+        # (persists' second reading, over the decided pixels)
         share = f"{shift.confirmed_sure:.0%} of the clear evidence"
         twice = f", and {shift.previous.confirmed_sure:.0%} at the previous check"
     if not _confirms(shift, 0.0, SHIFT_CONFIRMED, SHIFT_CONFIRMED_ONE_VIEW) and _confirms_new(shift, 0.0):

@@ -822,7 +822,7 @@ class CameraState:
     #: (k, 2) shifts no passing check so far could tell apart (each narrows them; _second_look)
     shift_candidates: np.ndarray | None = None
     #: the (dx, dy) px its passing checks aligned the outline at (each once; its reflection zone covers them)
-    placed_at: list = field(default_factory=list)
+    placed_at: list[tuple[int, int]] = field(default_factory=list)
     #: the part's colours, from its last passing check
     palette: np.ndarray | None = None
     #: (h, w) bool observed mask of its last passing check (background removal's prior)
