@@ -37,6 +37,12 @@ STALL_READ_BELOW_GROWTH_PCT = 50.0
 #: 1.5x or more between two checks (a tier's step entering the band, infill), but at the 24 checks whose part
 #: rose under half the expected height the largest was 1.15x; where the rule first paused a failed print, 1.5-3.3x.
 TEXTURE_JUMP = 1.5
+#: ... and a view whose band turned at least this many times as textured counts while the part rose under
+#: PART_SLOWED_SOMEWHAT_PCT. A rise of 50-79 % is what a coarse reading (+-25 %) of a stalled top gives as often as
+#: a normal one; measured (seventeenth session) on five cross-check seeds, 94 camera-checks before any failure rose
+#: 50-79 %: their band textures changed by at most 1.41x, while strands piled over a slowed part read 2.4-5.9x there.
+TEXTURE_JUMP_STRONG = 2.0
+PART_SLOWED_SOMEWHAT_PCT = 80.0
 #: Bands smoother than this (grey levels of mean gradient, the texture cue's noise floor in shape_check) count as
 #: this smooth: ratios of smaller readings are noise
 SMOOTH_TEXTURE = 3.0

@@ -27,7 +27,8 @@ from .layer_shift import (BandShift, LayerShift, confirms_layer_shift, describe_
                           with_history)
 from .shape_check import (GROWTH_SPAN_CHECKS, ExpectedRegions, ShapeResult, check_shape,
                           near_any, not_decisive_where_calibrated)
-from .nest import NEST_MAX_COVERAGE, SOLID_MIN_COVERAGE, STALL_READ_BELOW_GROWTH_PCT, textured_views
+from .nest import (NEST_MAX_COVERAGE, PART_SLOWED_SOMEWHAT_PCT, SOLID_MIN_COVERAGE, STALL_READ_BELOW_GROWTH_PCT,
+                   TEXTURE_JUMP_STRONG, textured_views)
 from .tangle import SLOWED_RISE_PCT, loose_material
 
 VERDICTS = ("ok", "fail", "unknown")
@@ -544,8 +545,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     * or when, with the part's outline rising under half the expected height (the same figure, not where a top
       surface closes), a view's newest band looks 1.5 times as textured as at its previous check
       (``ShapeResult.band_texture``; ``band_texture_before``: each camera's reading at its previous check, not a
-      first look; :func:`core.nest.textured_views`): strands piled over a part that slowed, or the bed where it
-      should be;
+      first look; :func:`core.nest.textured_views`), or twice as textured (TEXTURE_JUMP_STRONG) with the part rising
+      under 80 % (PART_SLOWED_SOMEWHAT_PCT): strands piled over a part that slowed, or the bed where it should be;
     * unknown when no camera and no pair gave usable evidence; ok otherwise.
     """
     if layer_shift is None:
@@ -743,7 +744,11 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     # strand brings its own highlight and shadow where the printed face was smooth (the bed seen where the part
     # should be is textured too); the slow rise is the second witness, as for one view of loose material
     textured = textured_views({cam: r.band_texture for cam, r in usable.items()}, band_texture_before or {})
-    if textured and rise_pct is not None and rise_pct < SLOWED_RISE_PCT:
+    if rise_pct is not None and rise_pct >= SLOWED_RISE_PCT:
+        # a rise of 50-79 % (a coarse reading is +-25 %) slowed the part only if its band changed look markedly
+        textured = {cam: ratio for cam, ratio in textured.items()
+                    if ratio >= TEXTURE_JUMP_STRONG and rise_pct < PART_SLOWED_SOMEWHAT_PCT}
+    if textured and rise_pct is not None:
         fail_reasons.extend(f"{cam}: the newest layers look {ratio:.1f} times as textured as at the previous check "
                             f"while the part rose {rise_pct:.0f}% of the expected height: strands piled over the "
                             f"part, or the bed where it should be?" for cam, ratio in sorted(textured.items()))

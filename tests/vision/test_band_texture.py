@@ -99,3 +99,18 @@ def test_a_part_that_slowed_under_a_textured_band_pauses_and_a_rising_or_closing
     # no reading at the previous check, or a band no more textured than before
     assert decide(slowed, {}, s)[0] == "ok"
     assert decide(slowed, {}, s, band_texture_before={"a": 14.0, "b": 9.0})[0] == "ok"
+
+
+def test_a_band_turned_twice_as_textured_pauses_a_part_that_rose_only_part_of_the_expected_height():
+    # cross-check seed 13 ``026_spaghetti``: one view, a coarse rise of 60 % (+-25 %), band texture 3.9 -> 12.3
+    s = DetectionSettings()
+    before = {"a": 4.0}
+    strands = {"a": figures("a", growth=60.0, texture=12.0)}
+    verdict, reasons = decide(strands, {}, s, band_texture_before=before)
+    assert verdict == "fail"
+    assert any(why.startswith("a: the newest layers look 3.0 times as textured") for why in reasons)
+    # the same rise with a change of look a normal print shows (a tier's step entering the band): no pause
+    assert decide({"a": figures("a", growth=60.0, texture=7.0)}, {}, s, band_texture_before=before)[0] == "ok"
+    # a part rising as expected: even a strongly changed band is a view's artefact (a normal print read 5.7x)
+    assert decide({"a": figures("a", growth=100.0, texture=20.0)}, {}, s, band_texture_before=before)[0] == "ok"
+    assert decide({"a": figures("a", growth=85.0, texture=20.0)}, {}, s, band_texture_before=before)[0] == "ok"
