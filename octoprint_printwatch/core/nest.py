@@ -39,8 +39,8 @@ STALL_READ_BELOW_GROWTH_PCT = 50.0
 TEXTURE_JUMP = 1.5
 #: ... and a view whose band turned at least this many times as textured counts while the part rose under
 #: PART_SLOWED_SOMEWHAT_PCT. A rise of 50-79 % is what a coarse reading (+-25 %) of a stalled top gives as often as
-#: a normal one; measured (seventeenth session) on five cross-check seeds, 94 camera-checks before any failure rose
-#: 50-79 %: their band textures changed by at most 1.41x, while strands piled over a slowed part read 2.4-5.9x there.
+#: a normal one. Measured (seventeenth session) on six cross-check seeds: of 148 camera-checks before any failure that
+#: rose 50-79 %, one band's texture changed by 1.7x, the rest by at most 1.41x; after a failure's onset, 2-8x there.
 TEXTURE_JUMP_STRONG = 2.0
 PART_SLOWED_SOMEWHAT_PCT = 80.0
 #: Bands smoother than this (grey levels of mean gradient, the texture cue's noise floor in shape_check) count as
