@@ -427,6 +427,23 @@ def unseen_by_partner(result: ShapeResult, usable: Mapping[str, ShapeResult], pa
 COARSE_ROSE_BEFORE_PCT = 50.0
 
 
+#: A view's reading of a rise at its previous check corroborates a stop (decide's ``span_rise_before``) only
+#: when its last this many readings of the rise read one: where the camera cannot resolve the top, its readings
+#: jump by a pixel step from one check to the next (0-200 %), so one reading of a rise before a 0 is no history
+#: of rising.
+RISE_HELD_READINGS = 2
+
+
+def held_rise(at_previous: float | None, readings: Sequence[float]) -> float | None:
+    """The rise (% of the expected) a view read at its previous check (``at_previous``: fine, else over the span;
+    None: neither) where its readings before held it: the lowest of it and its last :data:`RISE_HELD_READINGS`
+    readings (``readings``: fine, else over the span, else coarse, at its checks that gave one since it was last
+    unusable, oldest first, the previous check's last), or None (no reading then, or too few readings)."""
+    if at_previous is None or len(readings) < RISE_HELD_READINGS:
+        return None
+    return float(min(at_previous, *readings[-RISE_HELD_READINGS:]))
+
+
 #: A view keeps its missing material from its last rising check (missing_since_rise) for at most this many
 #: checks since at which nothing went missing (under a quarter of its threshold more than at the rise): a stop
 #: late in an interval may show nothing at the first check after it, never at the second (a whole interval's
@@ -526,9 +543,10 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       (``missing_before``); a view that read such a rise at an earlier check and no rise (or no reading) at
       every check since (``missing_at_rise``: its missing material at that check; :func:`missing_since_rise`)
       counts too, measured against that check; where a view gives no one-check reading, its reading over the last
-      checks (``ShapeResult.span_growth_pct``) stands in for the fine rules, and a view whose own reading at its
-      previous check (``span_rise_before``: fine, else over the span) was a rise of ``COARSE_ROSE_BEFORE_PCT`` needs
-      no missing material to corroborate it,
+      checks (``ShapeResult.span_growth_pct``) stands in for the fine rules, and a view whose own readings before
+      (``span_rise_before``: fine, else over the span, at its previous check; CheckRunner passes it only where
+      the view's reading before that read a rise too, the lower of the two: :func:`held_rise`) were a rise of
+      ``COARSE_ROSE_BEFORE_PCT`` needs no missing material to corroborate it,
       or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
       abstains reports no ``error_pct`` and never fails);
     * or when the cameras together confirm that the newest layers sit sideways on the older ones
@@ -619,9 +637,10 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     if spanned and not stalled:
         with_span = {**{cam: r.growth_pct for cam, r in measured.items()}, **spanned}
         # A gap a few pixels deep hides in the outline's tolerance, so a view whose span reading is the first
-        # to see the part slow misses nothing yet; its own reading at its previous check (``span_rise_before``:
-        # fine, else over the span) corroborates it instead when that read the part rising: a stop is a change,
-        # while a top the camera cannot tell from what lies behind it never reads a rise.
+        # to see the part slow misses nothing yet; its own readings at its previous checks (``span_rise_before``:
+        # fine, else over the span, held by the reading before it: held_rise) corroborate it instead when they
+        # read the part rising: a stop is a change, while a top the camera cannot tell from what lies behind it
+        # never reads a rise, or reads one at one check and none at the next (pixel-step noise).
         stopped = {cam for cam in spanned
                    if ((span_rise_before or {}).get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT}
         stalled, bare_band = stall_rules(with_span, stopped)
@@ -844,6 +863,9 @@ class CameraState:
     #: its fine growth reading, else its reading over several checks, at the previous check (None: neither, or
     #: not usable there): decide's span stall rules
     last_span_rise: float | None = None
+    #: its last RISE_HELD_READINGS readings of the rise (fine, else over the span, else coarse) at the checks that
+    #: gave one since it was last unusable, oldest first: held_rise
+    rise_readings: tuple = ()
     #: its extra material at the previous check (None: not usable there)
     last_extra: float | None = None
     #: its growth reading at the previous check, fine or else coarse (None: none), and its missing material
@@ -936,8 +958,8 @@ class CheckRunner:
         growth_before = {name: state.last_growth for name, state in self.cameras.items()}
         extra_before = {name: state.last_extra for name, state in self.cameras.items() if state.last_extra is not None}
         rise_before = {name: state.last_rise for name, state in self.cameras.items() if state.last_rise is not None}
-        span_rise_before = {name: state.last_span_rise for name, state in self.cameras.items()
-                            if state.last_span_rise is not None}
+        span_rise_before = {name: rise for name, state in self.cameras.items()
+                            if (rise := held_rise(state.last_span_rise, state.rise_readings)) is not None}
         missing_before = {name: state.last_missing for name, state in self.cameras.items()
                           if state.last_missing is not None}
         missing_at_rise = {name: state.rise_missing for name, state in self.cameras.items()
@@ -1046,7 +1068,7 @@ class CheckRunner:
             r = shape.get(name)
             if r is None or not r.usable:
                 state.last_extra = state.last_rise = state.last_missing = state.last_foreign = None
-                state.last_span_rise = None
+                state.last_span_rise, state.rise_readings = None, ()
                 state.rise_missing, state.rise_quiet = None, 0
                 state.last_band_texture = None
                 continue
@@ -1054,6 +1076,9 @@ class CheckRunner:
             state.last_extra, state.last_missing, state.last_foreign = r.extra_pct, r.missing_pct, r.foreign_mask
             rise_before_this = state.last_rise
             state.last_span_rise = r.growth_pct if r.growth_pct is not None else r.span_growth_pct
+            reading = next((x for x in (r.growth_pct, r.span_growth_pct, r.coarse_growth_pct) if x is not None), None)
+            if reading is not None:
+                state.rise_readings = (*state.rise_readings, reading)[-RISE_HELD_READINGS:]
             state.last_rise = r.growth_pct if r.growth_pct is not None else r.coarse_growth_pct
             state.rise_missing, state.rise_quiet = missing_since_rise(
                 state.rise_missing, state.last_rise, r.missing_pct, settings.min_growth_pct,
