@@ -447,7 +447,9 @@ def _refuted_heights(earlier: Sequence[Mapping[str, BandShift]],
         for name, view in views.items():
             if view.null_scores is not None and view.height_to_image is not None:
                 current = (now or {}).get(name)
-                slipped = 0 if current is None else int(current.aligned_at[1]) - int(view.aligned_at[1])
+                moved = 0 if current is None else int(current.aligned_at[1]) - int(view.aligned_at[1])
+                # (a pixel of it is the alignment's own wobble, within the residual this check's null allows)
+                slipped = int(np.sign(moved)) * max(abs(moved) - HEIGHT_NULL_TOLERANCE_PX, 0)
                 readings.setdefault(name, []).append((view.null_scores.astype(np.float64),
                                                       float(view.height_to_image[1]), slipped))
     readings = {name: read for name, read in readings.items() if len(read) >= HEIGHT_NULL_REFUTED_CHECKS}
