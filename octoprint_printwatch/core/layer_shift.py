@@ -441,7 +441,8 @@ def _refuted_heights(earlier: Sequence[Mapping[str, BandShift]],
     (``now``, per camera) lies elsewhere, the same top in the image reads that many pixels lower or higher here. So
     a height is read there where it puts the top in the image now (``BandShift.aligned_at``): an outline that
     slipped up since (a slide onto the part's reflection) shows the top standing lower from then on, which the
-    checks before the slip read in place against their own outline, and so do not refute."""
+    checks before the slip read in place against their own outline, and so do not refute. The move is counted less
+    HEIGHT_NULL_TOLERANCE_PX: an anchored outline wobbles by a pixel, which this check's null already allows."""
     readings: dict[str, list] = {}
     for views in earlier:
         for name, view in views.items():
