@@ -131,6 +131,9 @@ class BandShift:
     # and the (2,) image px per mm of height at the part: the pooled null (one height error in every view)
     null_scores: np.ndarray | None = field(default=None, repr=False)
     height_to_image: np.ndarray | None = field(default=None, repr=False)
+    # (dx, dy) px: where the camera's alignment laid the expected outline (and so the band) for this reading; every
+    # shift above is relative to it
+    aligned_at: tuple[int, int] = (0, 0)
 
     @property
     def confirmed(self) -> float:
@@ -223,7 +226,7 @@ class LayerShift:
 def band_shift(observed: np.ndarray, bed: np.ndarray, before: np.ndarray, band: np.ndarray,
                reach_x: int, reach_y: int, min_dx: int, tolerance: float,
                undecided: np.ndarray | None = None, bed_to_image: np.ndarray | None = None,
-               height_to_image: np.ndarray | None = None) -> BandShift | None:
+               height_to_image: np.ndarray | None = None, aligned_at: tuple[int, int] = (0, 0)) -> BandShift | None:
     """Test every image shift of the newest band against what is seen (module docstring).
 
     All masks (h, w) bool, already aligned: ``observed`` material, ``bed`` confidently empty bed
@@ -234,7 +237,8 @@ def band_shift(observed: np.ndarray, bed: np.ndarray, before: np.ndarray, band: 
     looks like the bed, or material the shift does not move, neither helps nor hurts. Pixels within
     ``tolerance`` of the expected outline are left out (the alignment is that uncertain), and
     ``undecided`` pixels outside the part (where a brim, skirt or reflection may lie) count for nothing.
-    ``bed_to_image`` ((2, 2), the camera's image px per printer X/Y mm) is kept for the pooling.
+    ``bed_to_image`` ((2, 2), the camera's image px per printer X/Y mm) is kept for the pooling, and ``aligned_at``
+    (the alignment's (dx, dy) px the masks were laid at) for reading this check's top against later checks' outlines.
 
     A part that stands a little taller or lower than the model (a camera that fires a layer late, a
     height calibration error) also looks like a band moved up or down: the best such explanation is
@@ -259,7 +263,8 @@ def band_shift(observed: np.ndarray, bed: np.ndarray, before: np.ndarray, band: 
                      null_dy=null_dy, null_score=null_score, min_dx=int(min_dx), tolerance=float(tolerance),
                      maps=maps, bed_to_image=None if bed_to_image is None else np.asarray(bed_to_image, float),
                      null_scores=null_scores,
-                     height_to_image=None if height_to_image is None else np.asarray(height_to_image, float))
+                     height_to_image=None if height_to_image is None else np.asarray(height_to_image, float),
+                     aligned_at=(int(aligned_at[0]), int(aligned_at[1])))
 
 
 def _window(band: np.ndarray, reach_x: int, reach_y: int, tolerance: float) -> tuple[slice, slice]:
@@ -399,7 +404,7 @@ def estimate_layer_shift(views: Mapping[str, BandShift], *, max_mm: float = 8.0,
     readings there refute does not count in the null (HEIGHT_NULL_REFUTED_PX). None when no shift shows clearly
     to any camera.
     """
-    refuted = _refuted_heights(earlier)
+    refuted = _refuted_heights(earlier, views)
     steps = np.arange(-max_mm, max_mm + 1e-9, step_mm)
     gx, gy = np.meshgrid(steps, steps)
     grid = np.stack([gx.ravel(), gy.ravel()], axis=1)
@@ -426,16 +431,28 @@ def layer_shift_at(views: Mapping[str, BandShift], shift_mm, within_mm: float = 
     return _pooled(views, centre + offsets, vertical=vertical)
 
 
-def _refuted_heights(earlier: Sequence[Mapping[str, BandShift]]) -> RefutedHeights | None:
+def _refuted_heights(earlier: Sequence[Mapping[str, BandShift]],
+                     now: Mapping[str, BandShift] | None = None) -> RefutedHeights | None:
     """A function of a camera's name and (m,) heights (mm; its top moves by height x its image y px per mm of height)
     giving (m,) bool: the heights HEIGHT_NULL_REFUTED_CHECKS of that camera's readings at the ``earlier`` checks read
-    clearly wrong (HEIGHT_NULL_REFUTED_PX); None when no camera has that many readings."""
+    clearly wrong (HEIGHT_NULL_REFUTED_PX); None when no camera has that many readings.
+
+    A reading measured the top against the outline where that check's alignment laid it; where this check's
+    (``now``, per camera) lies elsewhere, the same top in the image reads that many pixels lower or higher here. So
+    a height is read there where it puts the top in the image now (``BandShift.aligned_at``): an outline that
+    slipped up since (a slide onto the part's reflection) shows the top standing lower from then on, which the
+    checks before the slip read in place against their own outline, and so do not refute. The move is counted less
+    HEIGHT_NULL_TOLERANCE_PX: an anchored outline wobbles by a pixel, which this check's null already allows."""
     readings: dict[str, list] = {}
     for views in earlier:
         for name, view in views.items():
             if view.null_scores is not None and view.height_to_image is not None:
+                current = (now or {}).get(name)
+                moved = 0 if current is None else int(current.aligned_at[1]) - int(view.aligned_at[1])
+                # (a pixel of it is the alignment's own wobble, within the residual this check's null allows)
+                slipped = int(np.sign(moved)) * max(abs(moved) - HEIGHT_NULL_TOLERANCE_PX, 0)
                 readings.setdefault(name, []).append((view.null_scores.astype(np.float64),
-                                                      float(view.height_to_image[1])))
+                                                      float(view.height_to_image[1]), slipped))
     readings = {name: read for name, read in readings.items() if len(read) >= HEIGHT_NULL_REFUTED_CHECKS}
     if not readings:
         return None
@@ -444,9 +461,10 @@ def _refuted_heights(earlier: Sequence[Mapping[str, BandShift]]) -> RefutedHeigh
         out = np.zeros(len(heights), int)
         # (each reading untolerant: the camera's calibration residual is the same at every check, and the null of
         # this check already allows it)
-        for scores, k in readings.get(name, ()):
+        for scores, k, slipped in readings.get(name, ()):
             r = len(scores) // 2
-            out += scores[np.clip(np.rint(heights * k).astype(int) + r, 0, 2 * r)] <= -HEIGHT_NULL_REFUTED_PX
+            there = np.rint(heights * k).astype(int) + slipped
+            out += scores[np.clip(there + r, 0, 2 * r)] <= -HEIGHT_NULL_REFUTED_PX
         return (out >= HEIGHT_NULL_REFUTED_CHECKS) & (heights != 0)
     return refuted
 

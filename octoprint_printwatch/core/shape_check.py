@@ -1451,7 +1451,8 @@ def check_shape(
             shifted_band = band_shift(observed, bed_evidence, before_band, band_a, reach, reach // 2,
                                       int(np.ceil(layer_shift_mm * regions.px_per_mm)), tol,
                                       undecided=marks if reflection_a is None else marks | reflection_a,
-                                      bed_to_image=regions.bed_to_image, height_to_image=regions.height_to_image)
+                                      bed_to_image=regions.bed_to_image, height_to_image=regions.height_to_image,
+                                      aligned_at=(dx, dy))
 
     # A part knocked off its place: most of the outline is empty, and the whole part stands elsewhere
     # (perhaps inside the bed-marks zone, where it would otherwise pass for a brim). Searched up to

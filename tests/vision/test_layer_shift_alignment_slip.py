@@ -1,0 +1,70 @@
+"""Earlier checks refute a height error only where they saw the top: against their own outline. When a camera's
+alignment has moved since (cross-check seed 13 `027_layer_shift`: one camera, its anchor pulled 7 px up onto the
+part's reflection at one check; seed 13 `024_runout`: an outline walking 2 px a check down a brim of the part's
+colour), the same top in the image stands that many pixels lower or higher against this check's outline. A top seen
+in place by the earlier outlines, and lower only against an outline that slipped up since, is the outline's move,
+which the height null explains; read against this check's outline, the earlier checks "refuted" it and the slip
+paused both prints before their onset as a layer shift along the line of sight."""
+import numpy as np
+
+from octoprint_printwatch.core.layer_shift import band_shift, confirms_layer_shift
+from octoprint_printwatch.core.pipeline import layer_shift_of
+
+SHAPE = (220, 320)
+CENTRE = 160
+J = [[0.0, 4.0], [2.0, 0.0]]      # image px per printer X / Y mm at the part: printer X towards the camera (down)
+HEIGHT = [0.0, -3.0]              # a part 1 mm taller: its top 3 px up
+MIN_DX = 6                        # 1.5 mm sideways
+
+
+def frustum(top: int, bottom: int, half_width_at_top: int, dx: int = 0, dy: int = 0) -> np.ndarray:
+    """A frustum seen from the front: rows top..bottom, 1 px wider per row down each side, moved by (dx, dy)."""
+    mask = np.zeros(SHAPE, bool)
+    for row in range(top, bottom):
+        half = half_width_at_top + (row - top)
+        mask[row + dy, CENTRE - half + dx: CENTRE + half + dx] = True
+    return mask
+
+
+# (as in test_layer_shift_height_history: the band's top sticks out of the older layers' outline, seen from above)
+BEFORE = frustum(88, 170, 52)
+BAND = frustum(80, 140, 30)
+
+
+def view(observed: np.ndarray, aligned_at=(0, 0)):
+    """One camera's reading, its masks laid at the alignment ``aligned_at`` (the observed mask in its frame)."""
+    return {"cam": band_shift(observed, ~observed, BEFORE, BAND, 24, 12, MIN_DX, 2.0, bed_to_image=J,
+                              height_to_image=HEIGHT, aligned_at=aligned_at)}
+
+
+IN_PLACE = view(BEFORE | BAND)
+# the band's top 8 px lower (and 6 px sideways) against the outline this check aligned
+TOP_LOWER = BEFORE | frustum(80, 140, 30, dx=6, dy=8)
+
+
+def test_checks_that_saw_the_top_in_place_against_the_same_outline_refute_a_lower_top():
+    now = view(TOP_LOWER, aligned_at=(3, 1))
+    earlier = view(BEFORE | BAND, aligned_at=(3, 1))
+    found = layer_shift_of({}, [(False, earlier), (True, earlier), (True, earlier)], now)
+    assert found.null_score < 0.25 * found.score
+    assert confirms_layer_shift(found, 1.5)
+
+
+def test_an_outline_that_slipped_up_since_explains_the_lower_top():
+    # this check's outline lies 8 px above the earlier checks' (aligned_at dy 1 -> -7): the top they saw in place
+    # is where it is seen now, 8 px below this outline's top
+    now = view(TOP_LOWER, aligned_at=(3, -7))
+    earlier = view(BEFORE | BAND, aligned_at=(3, 1))
+    found = layer_shift_of({}, [(False, earlier), (True, earlier), (True, earlier)], now)
+    assert found is None or found.null_score > 0.5 * found.score
+    assert found is None or not confirms_layer_shift(found, 1.5)
+
+
+def test_an_outline_that_slipped_down_since_leaves_the_top_lower_still():
+    # this check's outline lies 2 px below the earlier checks' (aligned_at dy 1 -> 3): the top stands 10 px lower
+    # than where they saw it, which they refute all the more
+    now = view(TOP_LOWER, aligned_at=(3, 3))
+    earlier = view(BEFORE | BAND, aligned_at=(3, 1))
+    found = layer_shift_of({}, [(False, earlier), (True, earlier), (True, earlier)], now)
+    assert found.null_score < 0.25 * found.score
+    assert confirms_layer_shift(found, 1.5)
