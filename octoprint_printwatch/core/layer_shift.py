@@ -68,11 +68,11 @@ SHIFT_PERSISTS_WITHIN_MM = 1.0
 #: from several directions and from one.
 SHIFT_MIN_SUPPORT_PX = 60
 SHIFT_MIN_SUPPORT_ONE_VIEW_PX = 150
-#: ... but one view needs no more than this share of every pixel the shift changes beyond the tolerance, decided or
-#: not (``LayerShift.swept``), nor fewer than several directions need: a small part, a far camera or a small move
-#: changes fewer than 150 / 0.85 px in all (a 2-mm move of a 58-mm box at 640 px: 138), while a handful of decided
-#: pixels of a wide band that mostly reads undecided is still a handful.
-SHIFT_MIN_SUPPORT_ONE_VIEW_SHARE = SHIFT_CONFIRMED_ONE_VIEW
+#: ... but one view needs no more than the share several directions need (SHIFT_CONFIRMED) of every pixel the shift
+#: changes beyond the tolerance, decided or not (``LayerShift.swept``), nor fewer than several directions need: a small
+#: part, a far camera or a small move changes fewer than 150 / 0.75 px in all (a 2-mm move of a 58-mm box at 640 px:
+#: 138), while a handful of decided pixels of a band whose move lands mostly where nothing is decided is still a handful.
+SHIFT_MIN_SUPPORT_ONE_VIEW_SHARE = SHIFT_CONFIRMED
 #: A shift the previous check's views read clearly not there (a new one) is also confirmed by the same shares
 #: counted over the pixels it changes that are decided (material or bed) or further than the alignment
 #: tolerance from the moved band's outline: the moved band's outline is as uncertain as the expected one,

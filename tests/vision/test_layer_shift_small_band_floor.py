@@ -1,6 +1,6 @@
 """One view's confirming-pixel floor on a band whose move changes few pixels in all (seventeenth session, helper
 c17): 150 px is out of reach for a small part, a far camera or a small move, so one view needs no more than
-0.85 of every pixel the shift changes (decided or not), and never fewer than several directions need (60)."""
+0.75 of every pixel the shift changes (decided or not), and never fewer than several directions need (60)."""
 from octoprint_printwatch.core.layer_shift import (SHIFT_MIN_SUPPORT_ONE_VIEW_PX, band_shift, confirms_layer_shift,
                                                    estimate_layer_shift)
 
@@ -26,9 +26,9 @@ def test_a_small_band_moved_in_full_view_is_confirmed_under_150_px():
 
 
 def test_a_small_band_whose_move_lands_partly_where_nothing_is_decided_is_not():
-    # a third of the overhang in the brim / skirt zone: every decided pixel confirms, but those are 112 of the
+    # over half of the overhang in the brim / skirt zone: every decided pixel confirms, but those are 96 of the
     # 144 the move changes
-    shift = one_view(undecided=Box(150, 95, 165, 104).mask())
+    shift = one_view(undecided=Box(150, 95, 165, 106).mask())
     assert shift.confirmed > 0.95 and shift.moved < shift.swept
-    assert shift.support < 0.85 * shift.swept
+    assert shift.support < 0.75 * shift.swept
     assert not confirms_layer_shift(shift, 1.5)
