@@ -71,7 +71,8 @@ SHIFT_MIN_SUPPORT_ONE_VIEW_PX = 150
 #: ... but one view needs no more than the share several directions need (SHIFT_CONFIRMED) of every pixel the shift
 #: changes beyond the tolerance, decided or not (``LayerShift.swept``), nor fewer than several directions need: a small
 #: part, a far camera or a small move changes fewer than 150 / 0.75 px in all (a 2-mm move of a 58-mm box at 640 px:
-#: 138), while a handful of decided pixels of a band whose move lands mostly where nothing is decided is still a handful.
+#: 138). A few decided pixels of a move that lands mostly where nothing is decided (a skirt zone, a dark top seen from
+#: above: 78 of 612) stay a few: the undecided ones count in ``swept``.
 SHIFT_MIN_SUPPORT_ONE_VIEW_SHARE = SHIFT_CONFIRMED
 #: A shift the previous check's views read clearly not there (a new one) is also confirmed by the same shares
 #: counted over the pixels it changes that are decided (material or bed) or further than the alignment
@@ -115,9 +116,10 @@ class BandShift:
     moved : pixels the shift changes outside the alignment tolerance (what full evidence would be).
     null_dy, null_score : the band's top raised (< 0) or lowered (> 0) as the image supports best, and
         how well (support - 2 x against, like a shift): the explanation a layer shift must beat.
-    maps : (5, 2 reach_y + 1, 2 reach_x + 1) float32 support, against, moved, overhang (the support that is
-        material outside the expected part) and moved_sure (moved less the undecided pixels within the
-        tolerance of the moved band's outline) for every shift (dx, dy) = (index_x - reach_x, index_y - reach_y).
+    maps : (6, 2 reach_y + 1, 2 reach_x + 1) float32 support, against, moved, overhang (the support that is
+        material outside the expected part), moved_sure (moved less the undecided pixels within the
+        tolerance of the moved band's outline) and swept (moved plus the undecided zone outside the part: every
+        pixel the shift changes beyond the tolerance) for every shift (dx, dy) = (index_x - reach_x, index_y - reach_y).
     bed_to_image : (2, 2) image px per bed mm at the part (columns: printer X, Y), or None.
     """
 
@@ -161,6 +163,8 @@ class LayerShift:
     overhang : of ``support``, material seen where the model has none.
     moved_sure : of ``moved``, the pixels decided (material or bed) or beyond the alignment tolerance of the
         moved band's outline (see SHIFT_OVERHANG_SHARE).
+    swept : every pixel the shift changes beyond the alignment tolerance, decided or not (one view's floor,
+        SHIFT_MIN_SUPPORT_ONE_VIEW_SHARE).
     opposite : the evidence for the move the other way (estimate_layer_shift only; see SHIFT_OPPOSITE_MAX).
     sides : as ``viewpoints``, but cameras on opposite sides of the part count apart, and a side counts with
         SIDE_MIN_MOVED_PX changed pixels whatever its share.
@@ -354,7 +358,7 @@ def _vertical_null(evidence: _Evidence, before: np.ndarray, band: np.ndarray,
 
 def _band_shift_maps(evidence: _Evidence, before: np.ndarray, band: np.ndarray, reach_x: int, reach_y: int,
                      undecided: np.ndarray | None, tolerance: float) -> np.ndarray:
-    """(5, 2 reach_y + 1, 2 reach_x + 1) float32: support, against, moved, overhang and moved_sure of
+    """(6, 2 reach_y + 1, 2 reach_x + 1) float32: support, against, moved, overhang, moved_sure and swept of
     :func:`band_shift` (``BandShift.maps``) for every shift; each count is a correlation of the band (or its
     rim, or the band grown by ``tolerance``) with one evidence mask."""
     box = bounding_box(band)
