@@ -68,6 +68,12 @@ SHIFT_PERSISTS_WITHIN_MM = 1.0
 #: from several directions and from one.
 SHIFT_MIN_SUPPORT_PX = 60
 SHIFT_MIN_SUPPORT_ONE_VIEW_PX = 150
+#: ... but one view needs no more than the share several directions need (SHIFT_CONFIRMED) of every pixel the shift
+#: changes beyond the tolerance, decided or not (``LayerShift.swept``), nor fewer than several directions need: a small
+#: part, a far camera or a small move changes fewer than 150 / 0.75 px in all (a 2-mm move of a 58-mm box at 640 px:
+#: 138). A few decided pixels of a move that lands mostly where nothing is decided (a skirt zone, a dark top seen from
+#: above: 78 of 612) stay a few: the undecided ones count in ``swept``.
+SHIFT_MIN_SUPPORT_ONE_VIEW_SHARE = SHIFT_CONFIRMED
 #: A shift the previous check's views read clearly not there (a new one) is also confirmed by the same shares
 #: counted over the pixels it changes that are decided (material or bed) or further than the alignment
 #: tolerance from the moved band's outline: the moved band's outline is as uncertain as the expected one,
@@ -110,9 +116,10 @@ class BandShift:
     moved : pixels the shift changes outside the alignment tolerance (what full evidence would be).
     null_dy, null_score : the band's top raised (< 0) or lowered (> 0) as the image supports best, and
         how well (support - 2 x against, like a shift): the explanation a layer shift must beat.
-    maps : (5, 2 reach_y + 1, 2 reach_x + 1) float32 support, against, moved, overhang (the support that is
-        material outside the expected part) and moved_sure (moved less the undecided pixels within the
-        tolerance of the moved band's outline) for every shift (dx, dy) = (index_x - reach_x, index_y - reach_y).
+    maps : (6, 2 reach_y + 1, 2 reach_x + 1) float32 support, against, moved, overhang (the support that is
+        material outside the expected part), moved_sure (moved less the undecided pixels within the
+        tolerance of the moved band's outline) and swept (moved plus the undecided zone outside the part: every
+        pixel the shift changes beyond the tolerance) for every shift (dx, dy) = (index_x - reach_x, index_y - reach_y).
     bed_to_image : (2, 2) image px per bed mm at the part (columns: printer X, Y), or None.
     """
 
@@ -159,6 +166,8 @@ class LayerShift:
     overhang : of ``support``, material seen where the model has none.
     moved_sure : of ``moved``, the pixels decided (material or bed) or beyond the alignment tolerance of the
         moved band's outline (see SHIFT_OVERHANG_SHARE).
+    swept : every pixel the shift changes beyond the alignment tolerance, decided or not (one view's floor,
+        SHIFT_MIN_SUPPORT_ONE_VIEW_SHARE).
     opposite : the evidence for the move the other way (estimate_layer_shift only; see SHIFT_OPPOSITE_MAX).
     sides : as ``viewpoints``, but cameras on opposite sides of the part count apart, and a side counts with
         SIDE_MIN_MOVED_PX changed pixels whatever its share.
@@ -176,6 +185,7 @@ class LayerShift:
     moved_by: dict[str, float] = field(default_factory=dict)
     overhang: int = 0   # of the support, material seen where the model has none (the moved band sticking out)
     moved_sure: int = 0   # of moved, those decided or beyond the tolerance of the moved band's outline
+    swept: int = 0   # every pixel the shift changes beyond the tolerance, decided or not (>= moved)
     opposite: "LayerShift | None" = None   # the same cameras' evidence for the move the other way (-shift_mm)
     sides: int = 1
     vertical: bool = True
@@ -208,6 +218,7 @@ class LayerShift:
                    "support": self.support, "against": self.against, "moved": self.moved,
                    "null_score": round(self.null_score, 1), "viewpoints": self.viewpoints,
                    "overhang": self.overhang, "confirmed_sure": round(self.confirmed_sure, 3),
+                   "moved_sure": self.moved_sure, "swept": self.swept,
                    **({"opposite_confirmed": round(self.opposite.confirmed_sure, 3)} if self.opposite else {}),
                    "cameras": {name: list(d) for name, d in self.cameras.items()},
                    "moved_by": {name: round(float(v)) for name, v in self.moved_by.items()}}
@@ -352,7 +363,7 @@ def _vertical_null(evidence: _Evidence, before: np.ndarray, band: np.ndarray,
 
 def _band_shift_maps(evidence: _Evidence, before: np.ndarray, band: np.ndarray, reach_x: int, reach_y: int,
                      undecided: np.ndarray | None, tolerance: float) -> np.ndarray:
-    """(5, 2 reach_y + 1, 2 reach_x + 1) float32: support, against, moved, overhang and moved_sure of
+    """(6, 2 reach_y + 1, 2 reach_x + 1) float32: support, against, moved, overhang, moved_sure and swept of
     :func:`band_shift` (``BandShift.maps``) for every shift; each count is a correlation of the band (or its
     rim, or the band grown by ``tolerance``) with one evidence mask."""
     box = bounding_box(band)
@@ -378,6 +389,8 @@ def _band_shift_maps(evidence: _Evidence, before: np.ndarray, band: np.ndarray, 
     support = overhang + uncovered(fresh & empty)
     against = corr(empty & outside) + uncovered(fresh & seen)
     moved = corr(outside) + uncovered(fresh & ~ring)
+    # every pixel the move changes beyond the tolerance, decided or not (what the shift could show at best)
+    swept = moved if undecided is None else moved + corr(~(before | band) & ~ring & undecided)
     # undecided pixels within the tolerance of the moved band's outline: inside it (where the moved band lands
     # outside the part: its rim) and just beyond it (where it uncovers the band: the band grown, less the band)
     unsure = ~seen & ~empty
@@ -390,7 +403,7 @@ def _band_shift_maps(evidence: _Evidence, before: np.ndarray, band: np.ndarray, 
                                     cv2.TM_CCORR)
                   + cv2.matchTemplate(around(fresh & ~ring & unsure, near, reach_x, reach_y), halo.astype(np.float32),
                                       cv2.TM_CCORR))
-    return np.stack([support, against, moved, overhang, moved - rim_unsure]).astype(np.float32)
+    return np.stack([support, against, moved, overhang, moved - rim_unsure, swept]).astype(np.float32)
 
 
 def estimate_layer_shift(views: Mapping[str, BandShift], *, max_mm: float = 8.0,
@@ -483,7 +496,7 @@ def _pooled(views: Mapping[str, BandShift], grid: np.ndarray, vertical: bool = T
             refuted: RefutedHeights | None = None) -> LayerShift | None:
     """The best of the (n, 2) bed shifts ``grid`` (mm) by the pooled score (estimate_layer_shift); a camera
     counts the shift's vertical image move beyond its tolerance too unless ``vertical`` is False."""
-    total = np.zeros((5, len(grid)), np.float64)
+    total = np.zeros((6, len(grid)), np.float64)
     null = np.zeros(len(grid), np.float64)
     clear = np.zeros(len(grid), bool)          # the shift shows clearly in at least one camera
     shows, directions, moved_by, per_camera = {}, {}, {}, {}
@@ -510,7 +523,7 @@ def _pooled(views: Mapping[str, BandShift], grid: np.ndarray, vertical: bool = T
         shown = (np.hypot(image[:, 0], np.maximum(np.abs(image[:, 1]) - view.tolerance, 0.0)) if vertical
                  else np.abs(image[:, 0]).astype(np.float64))
         weight = np.clip((shown - 0.5 * view.min_dx) / (0.5 * view.min_dx), 0.0, 1.0) * ok
-        values = np.zeros((5, len(grid)))
+        values = np.zeros((6, len(grid)))
         values[:, ok] = view.maps[:, iy[ok], ix[ok]]
         moved_by[name] = values[2] * weight
         per_camera[name] = values * weight
@@ -541,7 +554,7 @@ def _pooled(views: Mapping[str, BandShift], grid: np.ndarray, vertical: bool = T
     return LayerShift(side_apart=side_apart, shift_mm=grid[best].copy(), support=int(round(total[0, best])),
                       against=int(round(total[1, best])), moved=int(round(total[2, best])), cameras=cameras,
                       null_score=float(null[best]), moved_by=share, overhang=int(round(total[3, best])),
-                      moved_sure=int(round(total[4, best])),
+                      moved_sure=int(round(total[4, best])), swept=int(round(total[5, best])),
                       viewpoints=count_viewpoints(looking, share, min_share),
                       sides=count_viewpoints(looking, share, min(min_share, SIDE_MIN_MOVED_PX), period=2 * np.pi),
                       vertical=vertical)
@@ -670,11 +683,21 @@ def _confirms(shift: LayerShift, min_mm: float, several_share: float, one_view_s
     several = shift.viewpoints >= 2
     share = shift.confirmed_sure if sure else shift.confirmed
     return (bool(shift.cameras) and shift.magnitude_mm >= min_mm
-            and shift.support >= (SHIFT_MIN_SUPPORT_PX if several else SHIFT_MIN_SUPPORT_ONE_VIEW_PX)
+            and shift.support >= _min_support(shift, several)
             and share >= (several_share if several else one_view_share)
             and (not sure or shift.overhang >= SHIFT_OVERHANG_SHARE * shift.support)
             and (straddles_onset or shift.against <= SHIFT_AGAINST * shift.support)
             and (shift.score >= SHIFT_OVER_NULL * shift.null_score or beats_null_apart(shift)))
+
+
+def _min_support(shift: LayerShift, several: bool) -> float:
+    """Confirming pixels the shift needs: SHIFT_MIN_SUPPORT_PX from several directions; from one,
+    SHIFT_MIN_SUPPORT_ONE_VIEW_PX or, where that exceeds SHIFT_MIN_SUPPORT_ONE_VIEW_SHARE of all the pixels the shift
+    can change (a small band), that share of them, never under SHIFT_MIN_SUPPORT_PX."""
+    if several:
+        return SHIFT_MIN_SUPPORT_PX
+    return max(SHIFT_MIN_SUPPORT_PX,
+               min(SHIFT_MIN_SUPPORT_ONE_VIEW_PX, SHIFT_MIN_SUPPORT_ONE_VIEW_SHARE * shift.swept))
 
 
 def beats_null_apart(shift: LayerShift) -> bool:
