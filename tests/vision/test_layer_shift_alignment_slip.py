@@ -10,25 +10,7 @@ import numpy as np
 from octoprint_printwatch.core.layer_shift import band_shift, confirms_layer_shift
 from octoprint_printwatch.core.pipeline import layer_shift_of
 
-SHAPE = (220, 320)
-CENTRE = 160
-J = [[0.0, 4.0], [2.0, 0.0]]      # image px per printer X / Y mm at the part: printer X towards the camera (down)
-HEIGHT = [0.0, -3.0]              # a part 1 mm taller: its top 3 px up
-MIN_DX = 6                        # 1.5 mm sideways
-
-
-def frustum(top: int, bottom: int, half_width_at_top: int, dx: int = 0, dy: int = 0) -> np.ndarray:
-    """A frustum seen from the front: rows top..bottom, 1 px wider per row down each side, moved by (dx, dy)."""
-    mask = np.zeros(SHAPE, bool)
-    for row in range(top, bottom):
-        half = half_width_at_top + (row - top)
-        mask[row + dy, CENTRE - half + dx: CENTRE + half + dx] = True
-    return mask
-
-
-# (as in test_layer_shift_height_history: the band's top sticks out of the older layers' outline, seen from above)
-BEFORE = frustum(88, 170, 52)
-BAND = frustum(80, 140, 30)
+from .frustum_scene import BAND, BEFORE, HEIGHT, J, MIN_DX, frustum
 
 
 def view(observed: np.ndarray, aligned_at=(0, 0)):
