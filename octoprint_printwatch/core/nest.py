@@ -20,6 +20,8 @@ from typing import Mapping
 
 import numpy as np
 
+from .tangle import SLOWED_RISE_PCT
+
 #: A stalled part's newest band covered less than this share by the part's material is a nest or the bed
 #: (strands 0.4 mm wide over the bed read about 0.5 where they cover half of it; a solid face reads 0.9-1.0)
 NEST_MAX_COVERAGE = 0.5
@@ -80,10 +82,21 @@ def region_texture(gradient: np.ndarray | None, region: np.ndarray) -> float | N
     return float(np.mean(gradient[region]))
 
 
-def textured_views(texture: Mapping[str, float | None], before: Mapping[str, float]) -> dict[str, float]:
-    """The views whose newest band is :data:`TEXTURE_JUMP` times as textured as at their previous check, with
-    that ratio: ``texture`` and ``before`` map cameras to :attr:`ShapeResult.band_texture` now and at the
-    previous check (a camera missing from ``before`` has no such reading: not counted)."""
+def texture_jump_for(rise_pct: float | None) -> float | None:
+    """How many times as textured as at its previous check a view's newest band must look to show strands or the
+    bed on a part that rose ``rise_pct`` (% of the expected; None: no reading): :data:`TEXTURE_JUMP` under
+    SLOWED_RISE_PCT, :data:`TEXTURE_JUMP_STRONG` under :data:`PART_SLOWED_SOMEWHAT_PCT`, else None (a part
+    rising as expected: a changed look is the view's artefact)."""
+    if rise_pct is None or rise_pct >= PART_SLOWED_SOMEWHAT_PCT:
+        return None
+    return TEXTURE_JUMP if rise_pct < SLOWED_RISE_PCT else TEXTURE_JUMP_STRONG
+
+
+def textured_views(texture: Mapping[str, float | None], before: Mapping[str, float],
+                   jump: float = TEXTURE_JUMP) -> dict[str, float]:
+    """The views whose newest band is ``jump`` times as textured as at their previous check, with that ratio:
+    ``texture`` and ``before`` map cameras to :attr:`ShapeResult.band_texture` now and at the previous check
+    (a camera missing from ``before`` has no such reading: not counted)."""
     ratios = {cam: t / max(before[cam], SMOOTH_TEXTURE) for cam, t in texture.items()
               if t is not None and before.get(cam) is not None}
-    return {cam: ratio for cam, ratio in ratios.items() if ratio >= TEXTURE_JUMP}
+    return {cam: ratio for cam, ratio in ratios.items() if ratio >= jump}

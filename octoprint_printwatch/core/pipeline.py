@@ -27,9 +27,9 @@ from .layer_shift import (BandShift, LayerShift, confirms_layer_shift, describe_
                           with_history)
 from .shape_check import (GROWTH_SPAN_CHECKS, ExpectedRegions, ShapeResult, check_shape,
                           near_any, not_decisive_where_calibrated)
-from .nest import (NEST_MAX_COVERAGE, PART_SLOWED_SOMEWHAT_PCT, SOLID_MIN_COVERAGE, STALL_READ_BELOW_GROWTH_PCT,
-                   TEXTURE_JUMP_STRONG, textured_views)
-from .tangle import SLOWED_RISE_PCT, loose_material
+from .nest import (NEST_MAX_COVERAGE, SOLID_MIN_COVERAGE, STALL_READ_BELOW_GROWTH_PCT, texture_jump_for,
+                   textured_views)
+from .tangle import loose_material
 
 VERDICTS = ("ok", "fail", "unknown")
 
@@ -762,12 +762,11 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     # band texture at its previous check): strands piled over it fill its outline and lift it a little, but each
     # strand brings its own highlight and shadow where the printed face was smooth (the bed seen where the part
     # should be is textured too); the slow rise is the second witness, as for one view of loose material
-    textured = textured_views({cam: r.band_texture for cam, r in usable.items()}, band_texture_before or {})
-    if rise_pct is not None and rise_pct >= SLOWED_RISE_PCT:
-        # a rise of 50-79 % (a coarse reading is +-25 %) slowed the part only if its band changed look markedly
-        textured = {cam: ratio for cam, ratio in textured.items()
-                    if ratio >= TEXTURE_JUMP_STRONG and rise_pct < PART_SLOWED_SOMEWHAT_PCT}
-    if textured and rise_pct is not None:
+    # (a rise of 50-79 % only with a band changed markedly: a coarse rise reading is +-25 %)
+    jump = texture_jump_for(rise_pct)
+    textured = ({} if jump is None else
+                textured_views({cam: r.band_texture for cam, r in usable.items()}, band_texture_before or {}, jump))
+    if textured:
         fail_reasons.extend(f"{cam}: the newest layers look {ratio:.1f} times as textured as at the previous check "
                             f"while the part rose {rise_pct:.0f}% of the expected height: strands piled over the "
                             f"part, or the bed where it should be?" for cam, ratio in sorted(textured.items()))
@@ -865,7 +864,7 @@ class CameraState:
     last_span_rise: float | None = None
     #: its last RISE_HELD_READINGS readings of the rise (fine, else over the span, else coarse) at the checks that
     #: gave one since it was last unusable, oldest first: held_rise
-    rise_readings: tuple = ()
+    rise_readings: tuple[float, ...] = ()
     #: its extra material at the previous check (None: not usable there)
     last_extra: float | None = None
     #: its growth reading at the previous check, fine or else coarse (None: none), and its missing material

@@ -19,15 +19,19 @@ def view(observed: np.ndarray, aligned_at=(0, 0)):
                               height_to_image=HEIGHT, aligned_at=aligned_at)}
 
 
-IN_PLACE = view(BEFORE | BAND)
 # the band's top 8 px lower (and 6 px sideways) against the outline this check aligned
 TOP_LOWER = BEFORE | frustum(80, 140, 30, dx=6, dy=8)
 
 
-def test_checks_that_saw_the_top_in_place_against_the_same_outline_refute_a_lower_top():
-    now = view(TOP_LOWER, aligned_at=(3, 1))
+def reading_with_outline_at(dy: int):
+    """The layer shift read at this check, its outline laid at (3, dy), after three checks that saw the part in
+    place against their own outline at (3, 1) (the first of them a first look)."""
     earlier = view(BEFORE | BAND, aligned_at=(3, 1))
-    found = layer_shift_of({}, [(False, earlier), (True, earlier), (True, earlier)], now)
+    return layer_shift_of({}, [(False, earlier), (True, earlier), (True, earlier)], view(TOP_LOWER, aligned_at=(3, dy)))
+
+
+def test_checks_that_saw_the_top_in_place_against_the_same_outline_refute_a_lower_top():
+    found = reading_with_outline_at(1)
     assert found.null_score < 0.25 * found.score
     assert confirms_layer_shift(found, 1.5)
 
@@ -35,9 +39,7 @@ def test_checks_that_saw_the_top_in_place_against_the_same_outline_refute_a_lowe
 def test_an_outline_that_slipped_up_since_explains_the_lower_top():
     # this check's outline lies 8 px above the earlier checks' (aligned_at dy 1 -> -7): the top they saw in place
     # is where it is seen now, 8 px below this outline's top
-    now = view(TOP_LOWER, aligned_at=(3, -7))
-    earlier = view(BEFORE | BAND, aligned_at=(3, 1))
-    found = layer_shift_of({}, [(False, earlier), (True, earlier), (True, earlier)], now)
+    found = reading_with_outline_at(-7)
     assert found is None or found.null_score > 0.5 * found.score
     assert found is None or not confirms_layer_shift(found, 1.5)
 
@@ -45,8 +47,6 @@ def test_an_outline_that_slipped_up_since_explains_the_lower_top():
 def test_an_outline_that_slipped_down_since_leaves_the_top_lower_still():
     # this check's outline lies 2 px below the earlier checks' (aligned_at dy 1 -> 3): the top stands 10 px lower
     # than where they saw it, which they refute all the more
-    now = view(TOP_LOWER, aligned_at=(3, 3))
-    earlier = view(BEFORE | BAND, aligned_at=(3, 1))
-    found = layer_shift_of({}, [(False, earlier), (True, earlier), (True, earlier)], now)
+    found = reading_with_outline_at(3)
     assert found.null_score < 0.25 * found.score
     assert confirms_layer_shift(found, 1.5)

@@ -27,7 +27,7 @@ def test_the_same_reading_not_known_to_be_new_still_needs_one_views_share():
 
 
 def test_a_new_shift_of_a_few_pixels_from_one_direction_is_not_confirmed():
-    # a 4-px band moved 10 px: 0.78 of its decided pixels, new, but under one view's 150 confirming px
+    # a 4-px band moved 10 px: all of its decided pixels, new, but 32 confirming px: under the 60 any reading needs
     base, band = Box(110, 110, 210, 170), Box(110, 106, 150, 110)
 
     def one(observed, hidden=None):
