@@ -388,8 +388,10 @@ class CheckResult:
 
 
 def band_shifts_of(shape: Mapping[str, ShapeResult]) -> dict[str, BandShift]:
-    """{camera: BandShift}: the layer-shift evidence of the usable cameras that tested their newest band."""
-    return {cam: r.band_shift for cam, r in shape.items() if r.usable and r.band_shift is not None}
+    """{camera: BandShift}: the layer-shift evidence of the usable cameras that tested their newest band (not
+    those read against a relit background, ShapeResult.relit: lit bed read as the part offsets a band)."""
+    return {cam: r.band_shift for cam, r in shape.items()
+            if r.usable and not r.relit and r.band_shift is not None}
 
 
 def layer_shift_of(shape: Mapping[str, ShapeResult],
@@ -518,7 +520,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       part found elsewhere: the part moved; extra material four times the threshold); extra material
       alone that appeared at once (``extra_before``: each camera's extra at its previous check) in one
       camera of a stereo pair (``pairs``) whose partner passes and sees none does not count
-      (:func:`unseen_by_partner`),
+      (:func:`unseen_by_partner`); views read against a relit background (``ShapeResult.relit``) count only
+      alongside a failing view that was not,
     * while the part visibly grows (median growth >= 50 %), a camera failing on missing material
       alone does not count (a face the colour of what lies behind it looks missing); nor does missing
       material alone from no more than half of the usable cameras unless the part stalled, nor from a
@@ -725,6 +728,12 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     # is sometimes seen by one camera of a pair only), and a pair with one usable camera is a single view.
     extra_before = extra_before or {}
     failing = [r for r in failing if not unseen_by_partner(r, usable, pairs, extra_before.get(r.camera))]
+    # A view read against a relit background (``ShapeResult.relit``: a reflection swept across a glossy bed) guesses
+    # the light under the part from the bed around it; where the reflection crosses the part it reads lit bed as
+    # material (extra where there is none, or a missing top as there). It corroborates a view that was not
+    # relit, never fails a print alone.
+    if all(r.relit for r in [*failing, *decisive]):
+        failing, decisive = [], []
     shape_fail = bool(decisive) or len(failing) >= needed
     fail_reasons = [reason for r in (failing if shape_fail else []) for reason in r.reasons]
     if stalled:
@@ -1016,12 +1025,15 @@ class CheckRunner:
             if result.usable:
                 state.saw(result.observed_mask, z)
                 state.last_growth = result.growth_pct
-            if result.palette is not None and result.usable and result.passed:
+            # (a view read against a relit background is remembered only for the part's rise: lit bed read as the
+            # part where the light under it was guessed would be taken for the part's colours and outline next
+            # time, and would pull the alignment the anchor holds for the rest of the print)
+            places = result.usable and result.passed and not result.relit
+            if result.palette is not None and places:
                 state.palette = result.palette
-            if result.usable and result.passed and result.shift_candidates is not None \
-                    and len(result.shift_candidates):
+            if places and result.shift_candidates is not None and len(result.shift_candidates):
                 state.shift_candidates = result.shift_candidates
-            if result.usable and result.passed:
+            if places:
                 state.previous_mask = result.observed_mask
                 if result.shift_px not in state.placed_at:
                     state.placed_at.append(result.shift_px)

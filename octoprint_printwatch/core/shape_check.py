@@ -124,6 +124,7 @@ class Evidence:
     background_norm: np.ndarray | None = None   # (h, w, 3) float32, the background at the frame's exposure
     frame_gradient: np.ndarray | None = None   # (h, w) float32, the frame's luma gradient (:func:`_gradient`)
     new_edges: np.ndarray | None = None   # (h, w) float32, edges the background has not, in units of their bed noise
+    relit: bool = False   # read against a background relit by the bed's smooth change of light (bed_light_change)
 
 
 @dataclass
@@ -193,6 +194,9 @@ class ShapeResult:
     #: strands piled over the part are textured where its printed faces are smooth); None where the band
     #: figures are not measured
     band_texture: float | None = None
+    #: the background was relit by the bed's smooth change of light before the part was read (Evidence.relit:
+    #: a reflection swept across a glossy bed, or a lamp moved)
+    relit: bool = False
     # pieces the overlay is drawn from (kept so the picture costs nothing unless asked for)
     _frame: np.ndarray | None = field(default=None, repr=False)
     _expected: np.ndarray | None = field(default=None, repr=False)
@@ -223,6 +227,7 @@ class ShapeResult:
             "span_growth_pct": None if self.span_growth_pct is None else round(self.span_growth_pct, 1),
             "growth_span": self.growth_span,
             "band_texture": None if self.band_texture is None else round(self.band_texture, 2),
+            "relit": self.relit,
             "shift_px": list(self.shift_px),
             "band_shift": None if self.band_shift is None else self.band_shift.figures(),
             **(self.new_outside.figures() if self.new_outside is not None
@@ -264,6 +269,56 @@ def _scaled(image: np.ndarray, gains: np.ndarray) -> np.ndarray:
     return cv2.LUT(image, table.reshape(1, 256, 3))
 
 
+#: bed_light_change reads the change of light on a grid of this many cells across the crop's longer side (fine
+#: enough to follow a reflection's soft edge, coarse enough for a strand or a shadow to cover few of a cell's
+#: pixels) from cells holding at least LIGHT_CELL_MIN_PIXELS certain-bed pixels
+LIGHT_GRID_CELLS = 16
+LIGHT_CELL_MIN_PIXELS = 12
+#: ... and the relit background is kept only where no more than this share of the bed still looks changed: a
+#: reflection relit leaves a few % (median 3 % on eight cross-check seeds), the bed's own structure seen by a camera
+#: that moved (tape strips 30-60 px wide) 17 % or more
+RELIT_MAX_CHANGED = 0.10
+
+
+def bed_light_change(bg: np.ndarray, frame: np.ndarray, sample: np.ndarray) -> np.ndarray | None:
+    """The smooth change of light on the bed between the background ``bg`` ((h, w, 3) float32, at the frame's
+    exposure) and ``frame`` ((h, w, 3) uint8), as an (h, w, 3) float32 offset to add to ``bg``, or None (too few
+    sampled pixels). ``sample``: flat indices of certain-bed pixels. Each grid cell's offset is the median of its
+    sampled pixels' differences (strands or a shadow over a few of them do not move it), cells without enough of
+    them take their neighbours', and the grid is interpolated over the crop. A reflection adds light without
+    changing the bed's grain, so the offset is added, not multiplied."""
+    h, w = frame.shape[:2]
+    if sample.size < LIGHT_CELL_MIN_PIXELS * 4:
+        return None
+    cell = max(8, int(np.ceil(max(h, w) / LIGHT_GRID_CELLS)))
+    gh, gw = -(-h // cell), -(-w // cell)
+    rows, cols = np.divmod(sample, w)
+    difference = frame[rows, cols].astype(np.float32) - bg[rows, cols]
+    cell_of = (rows // cell) * gw + cols // cell
+    grid = np.zeros((gh * gw, 3), np.float32)
+    known = np.zeros(gh * gw, np.float32)
+    order = np.argsort(cell_of, kind="stable")
+    cells, starts = np.unique(cell_of[order], return_index=True)
+    for c, part in zip(cells, np.split(order, starts[1:])):
+        if part.size >= LIGHT_CELL_MIN_PIXELS:
+            grid[c] = np.median(difference[part], axis=0)
+            known[c] = 1.0
+    if not known.any():
+        return None
+    grid, known = grid.reshape(gh, gw, 3), known.reshape(gh, gw)
+    # cells without bed (under the part) take a weighted mean of their known neighbours, spreading until filled
+    filled = grid * known[..., None]
+    weight = known.copy()
+    while (weight == 0).any():
+        spread = cv2.blur(filled, (3, 3), borderType=cv2.BORDER_REPLICATE)
+        spread_weight = cv2.blur(weight, (3, 3), borderType=cv2.BORDER_REPLICATE)
+        empty = weight == 0
+        reached = empty & (spread_weight > 0)
+        filled[reached] = spread[reached] / spread_weight[reached][:, None]
+        weight[reached] = 1.0
+    return cv2.resize(filled, (w, h), interpolation=cv2.INTER_LINEAR)
+
+
 def _outside_range(value: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
     """How far ``value`` lies outside [low, high], per pixel (0 inside)."""
     out = low - value
@@ -292,6 +347,7 @@ def material_evidence(
     previous: np.ndarray | None = None,
     part: np.ndarray | None = None,
     palette: np.ndarray | None = None,
+    relight_above: float | None = None,
 ) -> Evidence:
     """Background removal on one crop.
 
@@ -310,6 +366,11 @@ def material_evidence(
     palette : (k, 3) the part's colours seen at earlier checks (:func:`part_palette`), or None: sampled pixels
         that took the part's colour (:func:`took_the_part_colour`: a part fallen onto the bed, its strands)
         are material, not the bed's noise, and are left out of the noise levels.
+    relight_above : where more of the empty bed than this share looks changed after the exposure gains
+        (``changed_bed_fraction``), the light on the bed changed unevenly (a lamp's reflection that swept
+        across a glossy bed, a lamp that moved): the bed's smooth change of light (:func:`bed_light_change`)
+        is added to the background and the evidence read again, kept (``relit``) where the bed then matches
+        (RELIT_MAX_CHANGED); None: never.
     """
     sample_mask = bed_sample if int(bed_sample.sum()) >= 50 else ~prior
     sample = np.flatnonzero(sample_mask)
@@ -326,7 +387,26 @@ def material_evidence(
         if ok.sum() >= 50:
             gains = np.median(fr_s[ok] / bg_s[ok], axis=0).astype(np.float32)
             gains = np.clip(gains, 0.2, 5.0)
+    args = (background, frame, prior, sample, material_factor, bed_factor, previous, part, palette, gains)
     bg = _scaled(background, gains)
+    evidence = _evidence_against(bg, *args)
+    if relight_above is None or evidence.changed_bed_fraction <= relight_above:
+        return evidence
+    light = bed_light_change(bg, frame, np.flatnonzero(sample_mask))
+    if light is None:
+        return evidence
+    relit = _evidence_against(bg + light, *args)
+    if relit.changed_bed_fraction > min(relight_above, RELIT_MAX_CHANGED):
+        return evidence
+    relit.relit = True
+    return relit
+
+
+def _evidence_against(bg: np.ndarray, background: np.ndarray, frame: np.ndarray, prior: np.ndarray,
+                      sample: np.ndarray, material_factor: float, bed_factor: float, previous: np.ndarray | None,
+                      part: np.ndarray | None, palette: np.ndarray | None, gains: np.ndarray) -> Evidence:
+    """material_evidence's cues read against ``bg``, the background as the frame's light should show it
+    ((h, w, 3) float32); ``sample``: the flat indices of the certain-bed pixels it reads the noise on."""
     fr = np.ascontiguousarray(frame)
 
     luma_f, c1_f, c2_f = _luma_chroma(fr)
@@ -1287,7 +1367,7 @@ def check_shape(
 
     evidence = material_evidence(background[crop], frame[crop], prior, bed_sample,
                                  material_factor=material_factor, bed_factor=bed_factor, previous=previous,
-                                 part=distance <= tol, palette=palette)
+                                 part=distance <= tol, palette=palette, relight_above=max_changed_bed_fraction)
     cleaned = clean_mask(evidence.material)
     holes = enclosed(cleaned) & (distance <= shift_bound) if cleaned.any() else np.zeros_like(cleaned)
     observed = cleaned | holes
@@ -1540,7 +1620,8 @@ def check_shape(
         band_pixels=comparison.band_pixels, expected_pixels=comparison.expected_pixels,
         growth_pct=growth_pct, shift_px=(dx, dy), band_shift=shifted_band,
         threshold=float(threshold), band_threshold=float(band_threshold), passed=passed, usable=usable,
-        reasons=reasons, changed_bed_fraction=changed, observed_mask=observed_full, palette=palette_now,
+        reasons=reasons, changed_bed_fraction=changed, relit=evidence.relit, observed_mask=observed_full,
+        palette=palette_now,
         decisive=decisive, shift_candidates=shift_candidates, best_candidate=best_candidate,
         outline_best_candidate=outline_best,
         new_outside=new_outside, moved_px=moved_px, first_look=last_observed is None,
