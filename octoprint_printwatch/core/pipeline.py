@@ -480,6 +480,41 @@ def missing_since_rise(kept: float | None, rise: float | None, missing: float,
     return kept, quiet
 
 
+#: A view's newest band counts as gone since it read the part rising (standing_offset) once this many points more
+#: of it are missing than then (the stall rule's share of the band gone).
+BAND_GONE_SINCE_RISE_PCT = 25.0
+
+
+def lowest_missing_while_rising(kept: tuple[float, float | None] | None, rise: float | None, missing: float,
+                                band_missing: float | None) -> tuple[float, float | None] | None:
+    """A view's ``CameraState.missing_while_rising`` after a check: the lowest of its missing material (``missing``,
+    %) and of its newest band's (``band_missing``; None: no band figures) at the checks where it read the part
+    rising (``rise``: fine or else coarse growth, at least :data:`COARSE_ROSE_BEFORE_PCT`), ``kept`` from the
+    earlier ones (None: none yet)."""
+    if rise is None or rise < COARSE_ROSE_BEFORE_PCT:
+        return kept
+    if kept is None:
+        return missing, band_missing
+    low_band = kept[1] if band_missing is None else band_missing if kept[1] is None else min(kept[1], band_missing)
+    return min(kept[0], missing), low_band
+
+
+def standing_offset(result: ShapeResult, while_rising: tuple[float, float | None] | None) -> bool:
+    """Whether a view's missing material (``result``) is no more than it read at a check where it saw the part
+    rise (``while_rising``: its lowest missing material, overall and of the newest band, at such checks;
+    :func:`lowest_missing_while_rising`): under half its threshold more overall, and under
+    :data:`BAND_GONE_SINCE_RISE_PCT` more of the newest band. Material missing while the part rose is a face the
+    camera cannot tell from what lies behind it (decide's "visibly grows" rule); the same share missing later is
+    that face still, while a stop leaves the newest layers missing on top of it."""
+    if while_rising is None:
+        return False
+    missing, band = while_rising
+    if result.missing_pct - missing >= result.threshold / 2.0:
+        return False
+    return band is None or result.band_missing_pct is None or \
+        result.band_missing_pct - band < BAND_GONE_SINCE_RISE_PCT
+
+
 def rise_for_loose_material(usable: Mapping[str, ShapeResult], growth: Sequence[float]) -> float | None:
     """The part's rise since the previous check (% of the expected) that :func:`core.tangle.loose_material` weighs
     (``rise_pct``), or None: the median of ``growth`` (the fine readings, ``ShapeResult.growth_pct``, of -15 % or
@@ -509,7 +544,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
            missing_before: Mapping[str, float] | None = None,
            missing_at_rise: Mapping[str, float] | None = None,
            band_texture_before: Mapping[str, float] | None = None,
-           span_rise_before: Mapping[str, float] | None = None) -> tuple[str, list[str]]:
+           span_rise_before: Mapping[str, float] | None = None,
+           missing_while_rising: Mapping[str, tuple[float, float | None]] | None = None) -> tuple[str, list[str]]:
     """The combined decision rule -> (verdict, reasons).
 
     * A camera counts only when it gave a frame and its background still matches the bed
@@ -527,7 +563,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       material alone from no more than half of the usable cameras unless the part stalled, nor from a
       camera's first look at the part (``ShapeResult.first_look``: the growth test needs a second one), nor
       where, as a group, it is not the background (``ShapeResult.background_missing_pct``: a face of nearly
-      the bed's colour);
+      the bed's colour), nor from a view that missed as much while it saw the part rise (``missing_while_rising``:
+      :func:`standing_offset`);
     * or when the part stopped growing (corroborated by missing material in at least one view:
       25 % of the newest band, or half the threshold overall, in a view that saw no rise): the median over
       cameras of the observed rise of the part's upper outline since the previous check (readings below
@@ -707,6 +744,10 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
                 and (r.band_error_pct is None or r.background_band_missing_pct is None
                      or r.background_band_missing_pct + (r.band_error_pct - (r.band_missing_pct or 0.0))
                      <= r.band_threshold)}
+    # Nor does missing material a view already read at a check where it saw the part rise (a standing offset: a
+    # face it cannot tell from what lies behind it, as the "visibly grows" rule below says), when no more of the
+    # part and of its newest band is missing now: a stop leaves the newest layers missing on top of it
+    waiting |= {r.camera for r in missing_only if standing_offset(r, (missing_while_rising or {}).get(r.camera))}
     failing = [r for r in failing if r.camera not in waiting]
     missing_only = [r for r in missing_only if r.camera not in waiting]
     if missing_only and not stalled and 2 * len(missing_only) <= len(usable):
@@ -887,6 +928,10 @@ class CameraState:
     rise_missing: float | None = None
     #: the checks since that rise at which it missed nothing more (missing_since_rise)
     rise_quiet: int = 0
+    #: its lowest missing material, overall and of the newest band (None: no band figures), at the checks it read
+    #: the part rising and the print passed, since it was last unusable (None: none): decide's standing offset
+    #: (lowest_missing_while_rising)
+    missing_while_rising: tuple[float, float | None] | None = None
     #: the highest share of its newest band covered by the part's material so far (core/nest.py)
     band_coverage: float | None = None
     #: its newest band's texture at its previous check (ShapeResult.band_texture; None: not usable there, its
@@ -974,6 +1019,8 @@ class CheckRunner:
                            if state.rise_missing is not None}
         texture_before = {name: state.last_band_texture for name, state in self.cameras.items()
                           if state.last_band_texture is not None}
+        while_rising = {name: state.missing_while_rising for name, state in self.cameras.items()
+                        if state.missing_while_rising is not None}
         for name, state in self.cameras.items():
             frame = frames.get(name)
             background = self.backgrounds.get(name)
@@ -1073,7 +1120,7 @@ class CheckRunner:
                                   extra_before=extra_before, band_coverage_before=coverage_before,
                                   rise_before=rise_before, missing_before=missing_before,
                                   missing_at_rise=missing_at_rise, band_texture_before=texture_before,
-                                  span_rise_before=span_rise_before)
+                                  span_rise_before=span_rise_before, missing_while_rising=while_rising)
         verdict, reasons = decide(**self.last_decision)
         for name, state in self.cameras.items():
             r = shape.get(name)
@@ -1082,6 +1129,7 @@ class CheckRunner:
                 state.last_span_rise, state.rise_readings = None, ()
                 state.rise_missing, state.rise_quiet = None, 0
                 state.last_band_texture = None
+                state.missing_while_rising = None
                 continue
             state.last_band_texture = None if r.first_look else r.band_texture
             state.last_extra, state.last_missing, state.last_foreign = r.extra_pct, r.missing_pct, r.foreign_mask
@@ -1091,6 +1139,9 @@ class CheckRunner:
             if reading is not None:
                 state.rise_readings = (*state.rise_readings, reading)[-RISE_HELD_READINGS:]
             state.last_rise = r.growth_pct if r.growth_pct is not None else r.coarse_growth_pct
+            if verdict == "ok":   # (a check that failed is no healthy look: a part knocked loose still "rises")
+                state.missing_while_rising = lowest_missing_while_rising(
+                    state.missing_while_rising, state.last_rise, r.missing_pct, r.band_missing_pct)
             state.rise_missing, state.rise_quiet = missing_since_rise(
                 state.rise_missing, state.last_rise, r.missing_pct, settings.min_growth_pct,
                 quiet=state.rise_quiet, threshold=r.threshold, rise_before=rise_before_this)
