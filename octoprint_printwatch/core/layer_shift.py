@@ -159,8 +159,8 @@ class LayerShift:
     shift_mm : (2,) printer X/Y (mm) by which the newest layers sit off.
     support, against, moved : summed over the cameras in whose reach it lies.
     null_score : the same cameras' best "the part stands taller or lower" explanation, summed.
-    viewpoints : how many clearly different directions (VIEWPOINT_APART_DEG) those cameras look from,
-        of those with a share of the evidence (VIEWPOINT_MIN_SHARE of ``moved``).
+    viewpoints : how many clearly different directions (VIEWPOINT_APART_DEG, opposite sides apart) those cameras look
+        from, of those with a share of the evidence (VIEWPOINT_MIN_SHARE of ``moved``).
     moved_by : {camera: pixels the shift changes in it (weighted as pooled)}.
     cameras : the cameras it shows to clearly (image shift of at least their ``min_dx``), with their px shift.
     overhang : of ``support``, material seen where the model has none.
@@ -555,7 +555,9 @@ def _pooled(views: Mapping[str, BandShift], grid: np.ndarray, vertical: bool = T
                       against=int(round(total[1, best])), moved=int(round(total[2, best])), cameras=cameras,
                       null_score=float(null[best]), moved_by=share, overhang=int(round(total[3, best])),
                       moved_sure=int(round(total[4, best])), swept=int(round(total[5, best])),
-                      viewpoints=count_viewpoints(looking, share, min_share),
+                      # (cameras facing each other count apart: each one's outline error is its own, so two agreeing
+                      # on one bed shift are no offset of one view; they see it move the opposite ways in their images)
+                      viewpoints=count_viewpoints(looking, share, min_share, period=2 * np.pi),
                       sides=count_viewpoints(looking, share, min(min_share, SIDE_MIN_MOVED_PX), period=2 * np.pi),
                       vertical=vertical)
 

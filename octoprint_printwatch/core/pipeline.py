@@ -387,11 +387,18 @@ class CheckResult:
         }
 
 
+#: A view reading more than this share (%) of the whole part missing gives no layer-shift evidence: a shift moves the
+#: newest layers only, and the layers below stay where they belong, seen. A view that misses most of the part (a face
+#: in the bed's colour read as bed) reads "bed where the band should be" for any move of the band.
+SHIFT_VIEW_MAX_MISSING_PCT = 50.0
+
+
 def band_shifts_of(shape: Mapping[str, ShapeResult]) -> dict[str, BandShift]:
-    """{camera: BandShift}: the layer-shift evidence of the usable cameras that tested their newest band (not
-    those read against a relit background, ShapeResult.relit: lit bed read as the part offsets a band)."""
+    """{camera: BandShift}: the layer-shift evidence of the usable cameras that tested their newest band and see
+    most of the part (SHIFT_VIEW_MAX_MISSING_PCT), not read against a relit background (ShapeResult.relit: lit bed
+    read as the part offsets a band)."""
     return {cam: r.band_shift for cam, r in shape.items()
-            if r.usable and not r.relit and r.band_shift is not None}
+            if r.usable and not r.relit and r.band_shift is not None and r.missing_pct <= SHIFT_VIEW_MAX_MISSING_PCT}
 
 
 def layer_shift_of(shape: Mapping[str, ShapeResult],

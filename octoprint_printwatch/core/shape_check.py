@@ -1121,6 +1121,32 @@ class Comparison:
     #: the part stands where it belongs (next to nothing of it missing, nearly all of it seen): an object from
     #: above that meets its outline at a point was judged apart from it (masks.reaching_in_from_above)
     part_in_place: bool = False
+    #: the rods crossing the search box from the side (masks.crossing_the_box, looked for among every object outside
+    #: the outline), or None: neither the print's material nor bed, for the layer-shift test (check_shape)
+    rods: np.ndarray | None = None
+
+
+#: Material on a rod's line counts as the rod only where it is no thicker than the thickest rod plus this many px
+#: on either side (the rod's edge softened by JPEG and blur).
+ROD_THICKNESS_MARGIN_PX = 2.0
+
+
+def shift_evidence_without_rods(observed: np.ndarray, bed: np.ndarray, undecided: np.ndarray,
+                                rods: np.ndarray | None,
+                                expected: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(observed, bed, undecided) for :func:`band_shift` with the ``rods`` crossing the box (Comparison.rods) neither
+    material nor bed: the gantry's X rods rise with the print and hang just behind and above its top, where a band
+    moved up or sideways would land (cross-check seed 14 `031`: a band moved 18 px up onto the rod read as a shift of
+    6 mm, 1,055 confirming px of 1,314). A rod is thin: material outside the ``expected`` part thicker than the
+    thickest rod (ROD_THICKNESS_MARGIN_PX) lying on a rod's line is something in front of it (a shifted band merged
+    with the rod in the image), and stays evidence. All (h, w) bool."""
+    if rods is None or not rods.any():
+        return observed, bed, undecided
+    half = float(cv2.distanceTransform(rods.astype(np.uint8), cv2.DIST_L2, 3).max())
+    thicker = cv2.morphologyEx((observed & ~expected).astype(np.uint8), cv2.MORPH_OPEN,
+                               disk(half + ROD_THICKNESS_MARGIN_PX)).astype(bool)
+    rods = rods & ~thicker
+    return observed & ~rods, bed & ~rods, undecided | rods
 
 
 def _not_a_mark(observed: np.ndarray, last_observed: np.ndarray, expected: np.ndarray, previous: np.ndarray,
@@ -1204,6 +1230,12 @@ def compare_masks(
         outside &= ~crossing_the_box(objects, search, grown, part_in_place=in_place, material=outside)
         extra = cv2.morphologyEx(cv2.morphologyEx((outside & search).astype(np.uint8), cv2.MORPH_CLOSE, _KERNEL3),
                                  cv2.MORPH_OPEN, _KERNEL5)
+    rods = None
+    if objects is not None:
+        material_outside = observed & ~grown
+        if ((objects | material_outside) & search & ~erode(search, 2)).any():
+            # (a rod crossing the box has pixels at its edge: most checks have none, and the search costs ~5 ms)
+            rods = crossing_the_box(objects, search, grown, part_in_place=in_place, material=material_outside)
     extra = extra.astype(bool) & ~grown
     if extra.any():
         # specks far smaller than the part are noise, not a failure (a real blob is a sizeable share)
@@ -1248,6 +1280,7 @@ def compare_masks(
         band_core_pixels=int(band_core.sum()),
         foreign=foreign,
         part_in_place=in_place,
+        rods=rods,
     )
 
 
@@ -1528,9 +1561,13 @@ def check_shape(
             if rise_readable:
                 marks = dont_care_a & ~(_not_a_mark(observed, seen_before, expected, previous_silhouette, tol)
                                         | bed_evidence)
-            shifted_band = band_shift(observed, bed_evidence, before_band, band_a, reach, reach // 2,
+            if reflection_a is not None:
+                marks = marks | reflection_a
+            shift_observed, shift_bed, marks = shift_evidence_without_rods(observed, bed_evidence, marks,
+                                                                           comparison.rods, expected_a)
+            shifted_band = band_shift(shift_observed, shift_bed, before_band, band_a, reach, reach // 2,
                                       int(np.ceil(layer_shift_mm * regions.px_per_mm)), tol,
-                                      undecided=marks if reflection_a is None else marks | reflection_a,
+                                      undecided=marks,
                                       bed_to_image=regions.bed_to_image, height_to_image=regions.height_to_image,
                                       aligned_at=(dx, dy))
 
