@@ -275,8 +275,9 @@ def _scaled(image: np.ndarray, gains: np.ndarray) -> np.ndarray:
 LIGHT_GRID_CELLS = 16
 LIGHT_CELL_MIN_PIXELS = 12
 #: ... and the relit background is kept only where no more than this share of the bed still looks changed: a
-#: reflection relit leaves a few % (median 3 % on eight cross-check seeds), the bed's own structure seen by a camera
-#: that moved (tape strips 30-60 px wide) 17 % or more
+#: reflection relit leaves a few % (median 3 % on eight cross-check seeds); a camera knocked by a strip's width over a
+#: bed of tape strips 20-80 px wide leaves 42-100 %. (Knocked by half a broad strip it can leave 8 %: such a view is
+#: relit, and a relit view never pauses a print alone, pipeline.decide.)
 RELIT_MAX_CHANGED = 0.10
 
 
