@@ -801,16 +801,18 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     # rig's own); where they are too few (a part seen small: a rise of 4-6 px per check), each view's fine reading
     # or else its coarse one (``coarse_growth_pct``, +-25 %) stands in (rise_for_loose_material)
     rise_pct = None if top_closing else rise_for_loose_material(usable, growth)
+    # (a relit view's material beside the part may be lit bed: no loose material from it)
+    seen_loose = {cam: r for cam, r in usable.items() if not r.relit}
     tangle = loose_material({cam: None if r.new_outside is None else r.new_outside.area_mm2
-                             for cam, r in usable.items()},
-                            with_foot={cam: r.new_outside.with_foot_mm2 for cam, r in usable.items()
+                             for cam, r in seen_loose.items()},
+                            with_foot={cam: r.new_outside.with_foot_mm2 for cam, r in seen_loose.items()
                                        if r.new_outside is not None},
-                            directions={cam: r.new_outside.direction for cam, r in usable.items()
+                            directions={cam: r.new_outside.direction for cam, r in seen_loose.items()
                                         if r.new_outside is not None},
                             # (not where a top surface closes: a ridge's or apex's last layers are too thin
                             # for the outline to show them rise, so a normal part reads 0 % there)
                             rise_pct=rise_pct,
-                            surrounding={cam for cam, r in usable.items()
+                            surrounding={cam for cam, r in seen_loose.items()
                                          if r.new_outside is not None and r.new_outside.surrounds_part})
     if tangle is not None:
         fail_reasons.append(tangle)
