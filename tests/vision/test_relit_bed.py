@@ -6,11 +6,14 @@ background; the camera reads the part again, and its failing check counts alongs
 alignment for later checks, and gives no layer-shift evidence."""
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from octoprint_printwatch.core.pipeline import CheckRunner, band_shifts_of, decide
 from octoprint_printwatch.core.settings import DetectionSettings
 from octoprint_printwatch.core.shape_check import ShapeResult, bed_light_change, check_shape
+from octoprint_printwatch.core.tangle import NewMaterial
 
 from .synthetic import PART, Box, H, W, bed_texture, camera_effects, paint_part, regions
 from .test_pipeline import HEIGHTS, bed, cams, frame, make_plan  # noqa: F401  (cams is a fixture)
@@ -80,6 +83,17 @@ def test_a_relit_view_corroborates_a_failing_view_but_never_pauses_alone():
     # ... and a view that was not relit fails decisively on its own as before
     assert decide({"a": view("a", extra=156.0, relit=False), "b": view("b", extra=0.0, relit=False),
                    "c": view("c", extra=0.0, relit=False)}, {}, s)[0] == "fail"
+
+
+def test_a_relit_views_new_material_beside_the_part_is_no_loose_material():
+    # cross-check seed 10 ``059_layer_shift`` under a colour cast: 191 mm^2 "new" beside the part in the relit view
+    s = DetectionSettings()
+    lit = replace(view("a", extra=0.0, relit=True), new_outside=NewMaterial(191.0, 4000, 1, direction=0.0))
+    other = replace(view("b", extra=0.0, relit=False), new_outside=NewMaterial(9.0, 200, 1, direction=np.pi / 2))
+    assert decide({"a": lit, "b": other}, {}, s)[0] == "ok"
+    # the same material seen by views that were not relit is loose material
+    verdict, reasons = decide({"a": replace(lit, relit=False), "b": other}, {}, s)
+    assert verdict == "fail" and any("material appeared around the part" in why for why in reasons)
 
 
 def test_a_view_whose_bed_reflection_sweeps_at_every_check_passes_a_normal_print_and_places_nothing(cams):
