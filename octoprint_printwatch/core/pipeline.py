@@ -736,7 +736,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     # the background, a reflection); a failure of the part is seen from most sides. So plain shape
     # failures must come from at least half of the usable cameras (and ``min_failing_cameras``);
     # a decisive signature (the part displaced, the newest layers offset) suffices from one camera.
-    needed = max(settings.min_failing_cameras, math.ceil(len(usable) / 2))
+    # (a view read against a relit background only corroborates: it does not raise the share needed either)
+    needed = max(settings.min_failing_cameras, math.ceil(sum(not r.relit for r in usable.values()) / 2))
     decisive = [r for r in failing if r.decisive]
     missing_only = [r for r in failing
                     if not r.decisive and 0 < r.missing_pct and r.extra_pct * 2.0 <= r.missing_pct]

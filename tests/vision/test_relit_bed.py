@@ -80,6 +80,10 @@ def test_a_relit_view_corroborates_a_failing_view_but_never_pauses_alone():
     seconded = {"a": view("a", extra=40.0, relit=True), "b": view("b", extra=12.0, relit=False)}
     verdict, reasons = decide(seconded, {}, s)
     assert verdict == "fail" and "a: extra 40.0" in reasons
+    # ... nor does it raise the share of views that must fail: one of two views that were not relit fails as before
+    verdict, _ = decide({"a": view("a", extra=12.0, relit=False), "b": view("b", extra=0.0, relit=False),
+                         "c": view("c", extra=0.0, relit=True), "d": view("d", extra=0.0, relit=True)}, {}, s)
+    assert verdict == "fail"
     # ... and a view that was not relit fails decisively on its own as before
     assert decide({"a": view("a", extra=156.0, relit=False), "b": view("b", extra=0.0, relit=False),
                    "c": view("c", extra=0.0, relit=False)}, {}, s)[0] == "fail"
