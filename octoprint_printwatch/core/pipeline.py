@@ -564,7 +564,7 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       alone that appeared at once (``extra_before``: each camera's extra at its previous check) in one
       camera of a stereo pair (``pairs``) whose partner passes and sees none does not count
       (:func:`unseen_by_partner`); views read against a relit background (``ShapeResult.relit``) count only
-      alongside a failing view that was not,
+      alongside a failing view that was not (nor in the share needed, nor for loose material or a layer shift),
     * while the part visibly grows (median growth >= 50 %), a camera failing on missing material
       alone does not count (a face the colour of what lies behind it looks missing); nor does missing
       material alone from no more than half of the usable cameras unless the part stalled, nor from a

@@ -2,8 +2,9 @@
 a check: the exposure gains cannot follow a change of light that differs across the bed, so most of the empty bed
 looked changed and the camera gave no verdict (cross-check seed 15 ``038_spaghetti``'s s0R at every check,
 ``040_runout``'s only camera at two). shape_check.bed_light_change adds the bed's smooth change of light to the
-background; the camera reads the part again, and its failing check counts alongside a view that was not relit; it sets neither the part's colours nor its
-alignment for later checks, and gives no layer-shift evidence."""
+background; the camera reads the part again. A relit view only corroborates: its failing check counts alongside a view
+that was not relit, it raises no share of views needed, gives no layer-shift or loose-material evidence, and sets
+neither the part's colours nor its alignment for later checks."""
 from __future__ import annotations
 
 from dataclasses import replace
