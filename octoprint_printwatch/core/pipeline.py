@@ -502,8 +502,7 @@ def lowest_missing_while_rising(kept: tuple[float, float | None] | None, rise: f
         return kept
     if kept is None:
         return missing, band_missing
-    low_band = kept[1] if band_missing is None else band_missing if kept[1] is None else min(kept[1], band_missing)
-    return min(kept[0], missing), low_band
+    return min(kept[0], missing), min((x for x in (kept[1], band_missing) if x is not None), default=None)
 
 
 def standing_offset(result: ShapeResult, while_rising: tuple[float, float | None] | None) -> bool:
