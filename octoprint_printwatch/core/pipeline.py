@@ -563,10 +563,10 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       alone that appeared at once (``extra_before``: each camera's extra at its previous check) in one
       camera of a stereo pair (``pairs``) whose partner passes and sees none does not count
       (:func:`unseen_by_partner`); views read against a relit background (``ShapeResult.relit``) count only
-      alongside a failing view that was not (nor in the share needed, nor for loose material or a layer shift),
+      alongside a failing view that was not (in no share of views, nor for loose material or a layer shift),
     * while the part visibly grows (median growth >= 50 %), a camera failing on missing material
       alone does not count (a face the colour of what lies behind it looks missing); nor does missing
-      material alone from no more than half of the usable cameras unless the part stalled, nor from a
+      material alone from no more than half of the usable cameras not relit unless the part stalled, nor from a
       camera's first look at the part (``ShapeResult.first_look``: the growth test needs a second one), nor
       where, as a group, it is not the background (``ShapeResult.background_missing_pct``: a face of nearly
       the bed's colour), nor from a view that missed as much while it saw the part rise (``missing_while_rising``:
@@ -735,8 +735,9 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     # the background, a reflection); a failure of the part is seen from most sides. So plain shape
     # failures must come from at least half of the usable cameras (and ``min_failing_cameras``);
     # a decisive signature (the part displaced, the newest layers offset) suffices from one camera.
-    # (a view read against a relit background only corroborates: it does not raise the share needed either)
-    needed = max(settings.min_failing_cameras, math.ceil(sum(not r.relit for r in usable.values()) / 2))
+    # (a view read against a relit background only corroborates: no share of views counts it, here or below)
+    plain_views = sum(not r.relit for r in usable.values())
+    needed = max(settings.min_failing_cameras, math.ceil(plain_views / 2))
     decisive = [r for r in failing if r.decisive]
     missing_only = [r for r in failing
                     if not r.decisive and 0 < r.missing_pct and r.extra_pct * 2.0 <= r.missing_pct]
@@ -757,7 +758,7 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     waiting |= {r.camera for r in missing_only if standing_offset(r, (missing_while_rising or {}).get(r.camera))}
     failing = [r for r in failing if r.camera not in waiting]
     missing_only = [r for r in missing_only if r.camera not in waiting]
-    if missing_only and not stalled and 2 * len(missing_only) <= len(usable):
+    if missing_only and not stalled and 2 * len(missing_only) <= plain_views:
         # "Missing" alone, from no more than half of the cameras, while the part has not stopped growing:
         # faces the colour of what lies behind them (dark on dark, grey on grey) look exactly like this,
         # a runout does not (it stalls the growth, and the part's top is gone from most views).

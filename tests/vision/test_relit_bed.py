@@ -3,8 +3,9 @@ a check: the exposure gains cannot follow a change of light that differs across 
 looked changed and the camera gave no verdict (cross-check seed 15 ``038_spaghetti``'s s0R at every check,
 ``040_runout``'s only camera at two). shape_check.bed_light_change adds the bed's smooth change of light to the
 background; the camera reads the part again. A relit view only corroborates: its failing check counts alongside a view
-that was not relit, it raises no share of views needed, gives no layer-shift or loose-material evidence, and sets
-neither the part's colours nor its alignment for later checks."""
+that was not relit; it raises no share of views (neither the share needed to fail nor the one that outvotes missing
+material), gives no layer-shift or loose-material evidence, and sets neither the part's colours nor its alignment for
+later checks."""
 from __future__ import annotations
 
 from dataclasses import replace
@@ -88,6 +89,19 @@ def test_a_relit_view_corroborates_a_failing_view_but_never_pauses_alone():
     # ... and a view that was not relit fails decisively on its own as before
     assert decide({"a": view("a", extra=156.0, relit=False), "b": view("b", extra=0.0, relit=False),
                    "c": view("c", extra=0.0, relit=False)}, {}, s)[0] == "fail"
+
+
+def test_a_relit_view_that_passes_does_not_outvote_a_view_missing_material():
+    # "missing alone from no more than half of the views" waits for the growth test (a face the colour of what lies
+    # behind it); a relit view that passes is no view against it: it may read lit bed as the missing top
+    s = DetectionSettings()
+    missing = ShapeResult("a", 20.0, 20.0, 20.0, 0.0, 60.0, 60.0, 500, 5000, None, (0, 0), 7.0, 50.0,
+                          passed=False, usable=True, reasons=["a: missing 20.0"])
+    passing = replace(view("b", extra=0.0, relit=True), growth_pct=None)
+    verdict, reasons = decide({"a": missing, "b": passing}, {}, s)
+    assert verdict == "fail" and "a: missing 20.0" in reasons
+    # ... while a view that was not relit and passes still holds it back
+    assert decide({"a": missing, "b": replace(passing, relit=False)}, {}, s)[0] == "ok"
 
 
 def test_a_relit_views_new_material_beside_the_part_is_no_loose_material():
