@@ -572,7 +572,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       the bed's colour), nor from a view that missed as much while it saw the part rise (``missing_while_rising``:
       :func:`standing_offset`);
     * or when the part stopped growing (corroborated by missing material in at least one view:
-      25 % of the newest band, or half the threshold overall, in a view that saw no rise): the median over
+      25 % of the newest band, or half the threshold overall, in a view that saw no rise, finely or, where it
+      reads the rise only to the pixel, coarsely): the median over
       cameras of the observed rise of the part's upper outline since the previous check (readings below
       -15 %, a sunk outline, left out) is below ``min_growth_pct`` of the expected rise; or, unless a
       top surface closes, when two or more cameras measured growth, its median is under 50 % and two views
@@ -641,10 +642,16 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
         # that, a flat rise is a top skin closing in a colour the camera cannot tell from the bed
         # (where a top surface closes in the newest layers, ``top_closing``, its smooth skin may read missing
         # as a whole, like the bed: then only the newest band itself gone counts)
-        band_gone = any(read[cam] < settings.min_growth_pct
-                        and ((r.band_missing_pct or 0.0) >= 25.0
-                             or (not top_closing and (r.missing_pct >= r.threshold / 2.0 or cam in stopped)))
-                        for cam, r in measured.items())
+        # (a view whose rise only reads to the pixel, ``coarse_growth_pct``, and that reads none, is such a view too:
+        # the stall is decided on the fine readings; the missing layers show where they show)
+        still = ({cam for cam, reading in read.items() if reading < settings.min_growth_pct}
+                 | {cam for cam, r in usable.items()
+                    if cam not in read and r.growth_pct is None and r.coarse_growth_pct is not None
+                    and r.coarse_growth_pct < settings.min_growth_pct})
+        band_gone = any((usable[cam].band_missing_pct or 0.0) >= 25.0
+                        or (not top_closing and (usable[cam].missing_pct >= usable[cam].threshold / 2.0
+                                                 or cam in stopped))
+                        for cam in still)
         stalled = bool(growth) and float(np.median(growth)) < settings.min_growth_pct and band_gone
         # A part rising at under half the expected rate while two views that see it slow each miss part of its
         # newest band has slowed, not been misread: strands piling on a stopped part lift the outline a little

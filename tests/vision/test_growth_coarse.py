@@ -135,3 +135,15 @@ def test_a_view_that_reads_no_rise_while_nothing_goes_missing_forgets_its_rise()
     for missing in (2.0, 3.0, 3.2):
         state = missing_since_rise(*state[:1], 0.0, missing, s.min_growth_pct, state[1], 7.0)
     assert state == (0.0, 1)
+
+
+def test_a_view_that_reads_the_rise_only_coarsely_corroborates_the_stall_the_fine_readings_find():
+    # cross-check seed 17 ``032_runout`` check 3: s0L reads the part still, finely, and misses 2.5 %; s0R, at 4-5 px
+    # per check, reads it still to the pixel and misses 10 % of it (19 % of the newest band)
+    s = DetectionSettings()
+    fine = view("s0L", growth=0.0, band_missing=4.7, missing=2.5)
+    verdict, reasons = decide({"s0L": fine, "s0R": view("s0R", coarse=0.0, band_missing=19.4, missing=10.0)}, {}, s)
+    assert verdict == "fail" and any("has not grown" in why for why in reasons)
+    # ... not where the coarse view reads the part rising, nor where it misses nothing
+    assert decide({"s0L": fine, "s0R": view("s0R", coarse=100.0, band_missing=19.4, missing=10.0)}, {}, s)[0] == "ok"
+    assert decide({"s0L": fine, "s0R": view("s0R", coarse=0.0)}, {}, s)[0] == "ok"
