@@ -436,7 +436,11 @@ def unseen_by_partner(result: ShapeResult, usable: Mapping[str, ShapeResult], pa
 COARSE_ROSE_BEFORE_PCT = 50.0
 
 
-#: A view's reading of a rise at its previous check corroborates a stop (decide's ``span_rise_before``) only
+#: Views whose coarse readings read a stop after a held rise (decide's coarse stall rule) that corroborate it without
+#: missing material: one view's reading jumps by a pixel step, two at the same check do not
+COARSE_STOPPED_VIEWS = 2
+
+#: A view's reading of a rise at its previous check corroborates a stop (decide's ``held_rise_before``) only
 #: when its last this many readings of the rise read one: where the camera cannot resolve the top, its readings
 #: jump by a pixel step from one check to the next (0-200 %), so one reading of a rise before a 0 is no history
 #: of rising.
@@ -550,7 +554,7 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
            missing_before: Mapping[str, float] | None = None,
            missing_at_rise: Mapping[str, float] | None = None,
            band_texture_before: Mapping[str, float] | None = None,
-           span_rise_before: Mapping[str, float] | None = None,
+           held_rise_before: Mapping[str, float] | None = None,
            missing_while_rising: Mapping[str, tuple[float, float | None]] | None = None) -> tuple[str, list[str]]:
     """The combined decision rule -> (verdict, reasons).
 
@@ -591,9 +595,10 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       every check since (``missing_at_rise``: its missing material at that check; :func:`missing_since_rise`)
       counts too, measured against that check; where a view gives no one-check reading, its reading over the last
       checks (``ShapeResult.span_growth_pct``) stands in for the fine rules, and a view whose own readings before
-      (``span_rise_before``: fine, else over the span, at its previous check; CheckRunner passes it only where
-      the view's reading before that read a rise too, the lower of the two: :func:`held_rise`) were a rise of
-      ``COARSE_ROSE_BEFORE_PCT`` needs no missing material to corroborate it,
+      (``held_rise_before``: fine, else over the span, else coarse, at its previous check; CheckRunner passes it
+      only where the view's reading before that read a rise too, the lower of the two: :func:`held_rise`) were a
+      rise of ``COARSE_ROSE_BEFORE_PCT`` needs no missing material to corroborate it; nor do two such views whose
+      coarse readings (where no camera measured growth) read no rise,
       or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
       abstains reports no ``error_pct`` and never fails);
     * or when the cameras together confirm that the newest layers sit sideways on the older ones
@@ -690,12 +695,12 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     if spanned and not stalled:
         with_span = {**{cam: r.growth_pct for cam, r in measured.items()}, **spanned}
         # A gap a few pixels deep hides in the outline's tolerance, so a view whose span reading is the first
-        # to see the part slow misses nothing yet; its own readings at its previous checks (``span_rise_before``:
-        # fine, else over the span, held by the reading before it: held_rise) corroborate it instead when they
-        # read the part rising: a stop is a change, while a top the camera cannot tell from what lies behind it
-        # never reads a rise, or reads one at one check and none at the next (pixel-step noise).
+        # to see the part slow misses nothing yet; its own readings at its previous checks (``held_rise_before``:
+        # fine, else over the span, else coarse, held by the reading before it: held_rise) corroborate it instead
+        # when they read the part rising: a stop is a change, while a top the camera cannot tell from what lies
+        # behind it never reads a rise, or reads one at one check and none at the next (pixel-step noise).
         stopped = {cam for cam in spanned
-                   if ((span_rise_before or {}).get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT}
+                   if ((held_rise_before or {}).get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT}
         stalled, bare_band = stall_rules(with_span, stopped)
         if stalled:
             growth = list(with_span.values())
@@ -719,11 +724,17 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
             if cam in missing_at_rise or (rise_before.get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT}
     coarse = {cam: usable[cam].coarse_growth_pct for cam in rose
               if usable[cam].coarse_growth_pct is not None and usable[cam].coarse_growth_pct >= -15.0}
+    # ... or by nothing missing yet, where views that each held a rise over their last readings
+    # (``held_rise_before``) read none now, COARSE_STOPPED_VIEWS of them: a stop is a change, and views seeing it at
+    # the same check are no pixel step of one view (a top it cannot resolve reads 0-200 % by turns)
+    stopped = [cam for cam in coarse if coarse[cam] < settings.min_growth_pct
+               and ((held_rise_before or {}).get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT]
     coarse_stalled = (not growth and not top_closing and bool(coarse)
                       and float(np.median(list(coarse.values()))) < settings.min_growth_pct
-                      and any(coarse[cam] < settings.min_growth_pct and rose[cam] is not None
-                              and usable[cam].missing_pct - rose[cam] >= usable[cam].threshold / 2.0
-                              for cam in coarse))
+                      and (len(stopped) >= COARSE_STOPPED_VIEWS
+                           or any(coarse[cam] < settings.min_growth_pct and rose[cam] is not None
+                                  and usable[cam].missing_pct - rose[cam] >= usable[cam].threshold / 2.0
+                                  for cam in coarse)))
     if coarse_stalled:
         growth = list(coarse.values())
     stalled = stalled or coarse_stalled
@@ -926,9 +937,9 @@ class CameraState:
     older_observed: list = field(default_factory=list)
     #: the growth it read at its last usable check (None: it could not measure one)
     last_growth: float | None = None
-    #: its fine growth reading, else its reading over several checks, at the previous check (None: neither, or
-    #: not usable there): decide's span stall rules
-    last_span_rise: float | None = None
+    #: its reading of the rise at the previous check: fine, else over several checks, else coarse (None: none, or
+    #: not usable there): held_rise, for decide's span and coarse stall rules
+    last_reading: float | None = None
     #: its last RISE_HELD_READINGS readings of the rise (fine, else over the span, else coarse) at the checks that
     #: gave one since it was last unusable, oldest first: held_rise
     rise_readings: tuple[float, ...] = ()
@@ -1028,8 +1039,8 @@ class CheckRunner:
         growth_before = {name: state.last_growth for name, state in self.cameras.items()}
         extra_before = {name: state.last_extra for name, state in self.cameras.items() if state.last_extra is not None}
         rise_before = {name: state.last_rise for name, state in self.cameras.items() if state.last_rise is not None}
-        span_rise_before = {name: rise for name, state in self.cameras.items()
-                            if (rise := held_rise(state.last_span_rise, state.rise_readings)) is not None}
+        held_rise_before = {name: rise for name, state in self.cameras.items()
+                            if (rise := held_rise(state.last_reading, state.rise_readings)) is not None}
         missing_before = {name: state.last_missing for name, state in self.cameras.items()
                           if state.last_missing is not None}
         missing_at_rise = {name: state.rise_missing for name, state in self.cameras.items()
@@ -1137,13 +1148,13 @@ class CheckRunner:
                                   extra_before=extra_before, band_coverage_before=coverage_before,
                                   rise_before=rise_before, missing_before=missing_before,
                                   missing_at_rise=missing_at_rise, band_texture_before=texture_before,
-                                  span_rise_before=span_rise_before, missing_while_rising=while_rising)
+                                  held_rise_before=held_rise_before, missing_while_rising=while_rising)
         verdict, reasons = decide(**self.last_decision)
         for name, state in self.cameras.items():
             r = shape.get(name)
             if r is None or not r.usable:
                 state.last_extra = state.last_rise = state.last_missing = state.last_foreign = None
-                state.last_span_rise, state.rise_readings = None, ()
+                state.last_reading, state.rise_readings = None, ()
                 state.rise_missing, state.rise_quiet = None, 0
                 state.last_band_texture = None
                 state.missing_while_rising = None
@@ -1151,8 +1162,8 @@ class CheckRunner:
             state.last_band_texture = None if r.first_look else r.band_texture
             state.last_extra, state.last_missing, state.last_foreign = r.extra_pct, r.missing_pct, r.foreign_mask
             rise_before_this = state.last_rise
-            state.last_span_rise = r.growth_pct if r.growth_pct is not None else r.span_growth_pct
             reading = next((x for x in (r.growth_pct, r.span_growth_pct, r.coarse_growth_pct) if x is not None), None)
+            state.last_reading = reading
             if reading is not None:
                 state.rise_readings = (*state.rise_readings, reading)[-RISE_HELD_READINGS:]
             state.last_rise = r.growth_pct if r.growth_pct is not None else r.coarse_growth_pct

@@ -147,3 +147,23 @@ def test_a_view_that_reads_the_rise_only_coarsely_corroborates_the_stall_the_fin
     # ... not where the coarse view reads the part rising, nor where it misses nothing
     assert decide({"s0L": fine, "s0R": view("s0R", coarse=100.0, band_missing=19.4, missing=10.0)}, {}, s)[0] == "ok"
     assert decide({"s0L": fine, "s0R": view("s0R", coarse=0.0)}, {}, s)[0] == "ok"
+
+
+def test_two_views_that_held_a_rise_and_read_none_now_stalled_with_nothing_missing_yet():
+    # cross-check seed 17 ``024_runout`` check 6 (and seed 13 ``032``, seed 15 ``032``): three views of a part seen
+    # small read it rising (coarsely) at their last two checks and not at all now; the stop came late in the
+    # interval, so nothing is missing yet
+    s = DetectionSettings()
+    now = {cam: view(cam, coarse=0.0) for cam in ("s0L", "s0R", "s1")}
+    rose = {cam: 100.0 for cam in now}                       # each read a rise at its previous check
+    verdict, reasons = decide(now, {}, s, rise_before=rose, held_rise_before={"s0L": 75.0, "s0R": 100.0, "s1": 75.0})
+    assert verdict == "fail" and any("has not grown" in why for why in reasons)
+    # one view alone is a pixel step of that view (a top it cannot resolve reads 0-200 % by turns)
+    assert decide(now, {}, s, rise_before=rose, held_rise_before={"s0L": 75.0, "s0R": 25.0, "s1": 0.0})[0] == "ok"
+    # ... and views that did not hold a rise before need missing material, as ever
+    assert decide(now, {}, s, rise_before=rose)[0] == "ok"
+    # not while a view measures the rise finely, nor where a top surface closes
+    assert decide({**now, "s1": view("s1", growth=100.0)}, {}, s, rise_before=rose,
+                  held_rise_before={"s0L": 75.0, "s0R": 100.0})[0] == "ok"
+    assert decide(now, {}, s, rise_before=rose, held_rise_before={"s0L": 75.0, "s0R": 100.0, "s1": 75.0},
+                  top_closing=True)[0] == "ok"

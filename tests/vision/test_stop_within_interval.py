@@ -40,14 +40,14 @@ def test_two_views_slowing_over_their_span_right_after_reading_a_rise_stalled():
     s = DetectionSettings()
     now = {"s0L": view("s0L", span=14.3), "s0R": view("s0R", span=33.3)}
     assert decide(now, {}, s)[0] == "ok"                                             # HEAD: nothing missing
-    verdict, reasons = decide(now, {}, s, span_rise_before={"s0L": 50.0, "s0R": 66.7})
+    verdict, reasons = decide(now, {}, s, held_rise_before={"s0L": 50.0, "s0R": 66.7})
     assert verdict == "fail" and any("not grown as expected over the last checks" in r for r in reasons)
     # a view that read no rise at its previous check (it cannot see this part's top rise) corroborates nothing
-    assert decide(now, {}, s, span_rise_before={"s0L": 50.0, "s0R": 20.0})[0] == "ok"
+    assert decide(now, {}, s, held_rise_before={"s0L": 50.0, "s0R": 20.0})[0] == "ok"
     # one view slowing is not enough for the slowed rule; a stall (under 15 %) in one that read a rise is
     assert decide({"s0L": view("s0L", span=33.3), "s0R": view("s0R", span=80.0)}, {}, s,
-                  span_rise_before={"s0L": 66.7, "s0R": 100.0})[0] == "ok"
+                  held_rise_before={"s0L": 66.7, "s0R": 100.0})[0] == "ok"
     assert decide({"s0L": view("s0L", span=0.0), "s0R": view("s0R", span=0.0)}, {}, s,
-                  span_rise_before={"s0L": 57.1, "s0R": 42.9})[0] == "fail"
+                  held_rise_before={"s0L": 57.1, "s0R": 42.9})[0] == "fail"
     # not where a top surface closes (a smooth top skin)
-    assert decide(now, {}, s, span_rise_before={"s0L": 50.0, "s0R": 66.7}, top_closing=True)[0] == "ok"
+    assert decide(now, {}, s, held_rise_before={"s0L": 50.0, "s0R": 66.7}, top_closing=True)[0] == "ok"
