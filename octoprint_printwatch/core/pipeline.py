@@ -436,9 +436,15 @@ def unseen_by_partner(result: ShapeResult, usable: Mapping[str, ShapeResult], pa
 COARSE_ROSE_BEFORE_PCT = 50.0
 
 
-#: Views whose coarse readings read a stop after a held rise (decide's coarse stall rule) that corroborate it without
-#: missing material: one view's reading jumps by a pixel step, two at the same check do not
-COARSE_STOPPED_VIEWS = 2
+#: Views that read a stop after a held rise that stall a print with nothing missing yet (decide): one view's reading
+#: jumps by a pixel step, two at the same check do not
+STOPPED_VIEWS = 2
+
+
+def finest_reading(result: ShapeResult) -> float | None:
+    """A view's finest reading of the rise (% of the expected): fine, else over the span, else coarse; None: none."""
+    return next((x for x in (result.growth_pct, result.span_growth_pct, result.coarse_growth_pct) if x is not None),
+                None)
 
 #: A view's reading of a rise at its previous check corroborates a stop (decide's ``held_rise_before``) only
 #: when its last this many readings of the rise read one: where the camera cannot resolve the top, its readings
@@ -597,8 +603,9 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       checks (``ShapeResult.span_growth_pct``) stands in for the fine rules, and a view whose own readings before
       (``held_rise_before``: fine, else over the span, else coarse, at its previous check; CheckRunner passes it
       only where the view's reading before that read a rise too, the lower of the two: :func:`held_rise`) were a
-      rise of ``COARSE_ROSE_BEFORE_PCT`` needs no missing material to corroborate it; nor do two such views whose
-      coarse readings (where no camera measured growth) read no rise,
+      rise of ``COARSE_ROSE_BEFORE_PCT`` needs no missing material to corroborate it; nor do ``STOPPED_VIEWS`` such
+      views that read no rise now (each its finest reading: fine, else over the span, else coarse), where the
+      median of every view's finest reading reads none either,
       or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
       abstains reports no ``error_pct`` and never fails);
     * or when the cameras together confirm that the newest layers sit sideways on the older ones
@@ -724,20 +731,26 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
             if cam in missing_at_rise or (rise_before.get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT}
     coarse = {cam: usable[cam].coarse_growth_pct for cam in rose
               if usable[cam].coarse_growth_pct is not None and usable[cam].coarse_growth_pct >= -15.0}
-    # ... or by nothing missing yet, where views that each held a rise over their last readings
-    # (``held_rise_before``) read none now, COARSE_STOPPED_VIEWS of them: a stop is a change, and views seeing it at
-    # the same check are no pixel step of one view (a top it cannot resolve reads 0-200 % by turns)
-    stopped = [cam for cam in coarse if coarse[cam] < settings.min_growth_pct
-               and ((held_rise_before or {}).get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT]
     coarse_stalled = (not growth and not top_closing and bool(coarse)
                       and float(np.median(list(coarse.values()))) < settings.min_growth_pct
-                      and (len(stopped) >= COARSE_STOPPED_VIEWS
-                           or any(coarse[cam] < settings.min_growth_pct and rose[cam] is not None
-                                  and usable[cam].missing_pct - rose[cam] >= usable[cam].threshold / 2.0
-                                  for cam in coarse)))
+                      and any(coarse[cam] < settings.min_growth_pct and rose[cam] is not None
+                              and usable[cam].missing_pct - rose[cam] >= usable[cam].threshold / 2.0
+                              for cam in coarse))
     if coarse_stalled:
         growth = list(coarse.values())
     stalled = stalled or coarse_stalled
+    # Views that each held a rise over their last readings (``held_rise_before``) and read none now, STOPPED_VIEWS of
+    # them, stalled with nothing missing yet (a stop late in the interval leaves the newest layers too thin to miss):
+    # a stop is a change, and views that see it at the same check are no pixel step of one view (a top a view
+    # cannot resolve reads 0-200 % by turns). Each view's reading is its finest (fine, else over the span, else
+    # coarse), and their median must read no rise too.
+    readings = {cam: reading for cam, r in usable.items()
+                if (reading := finest_reading(r)) is not None and reading >= -15.0}
+    stopped_views = [cam for cam, reading in readings.items() if reading < settings.min_growth_pct
+                     and ((held_rise_before or {}).get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT]
+    if (not stalled and not top_closing and len(stopped_views) >= STOPPED_VIEWS
+            and float(np.median(list(readings.values()))) < settings.min_growth_pct):
+        stalled, growth = True, list(readings.values())
     size_fail, size_usable = [], 0
     for key, entry in size.items():
         error = entry.get("error_pct") if isinstance(entry, Mapping) else None
@@ -1162,7 +1175,7 @@ class CheckRunner:
             state.last_band_texture = None if r.first_look else r.band_texture
             state.last_extra, state.last_missing, state.last_foreign = r.extra_pct, r.missing_pct, r.foreign_mask
             rise_before_this = state.last_rise
-            reading = next((x for x in (r.growth_pct, r.span_growth_pct, r.coarse_growth_pct) if x is not None), None)
+            reading = finest_reading(r)
             state.last_reading = reading
             if reading is not None:
                 state.rise_readings = (*state.rise_readings, reading)[-RISE_HELD_READINGS:]
