@@ -446,6 +446,7 @@ def finest_reading(result: ShapeResult) -> float | None:
     return next((x for x in (result.growth_pct, result.span_growth_pct, result.coarse_growth_pct) if x is not None),
                 None)
 
+
 #: A view's reading of a rise at its previous check corroborates a stop (decide's ``held_rise_before``) only
 #: when its last this many readings of the rise read one: where the camera cannot resolve the top, its readings
 #: jump by a pixel step from one check to the next (0-200 %), so one reading of a rise before a 0 is no history
