@@ -439,6 +439,8 @@ COARSE_ROSE_BEFORE_PCT = 50.0
 #: Views that read a stop after a held rise that stall a print with nothing missing yet (decide): one view's reading
 #: jumps by a pixel step, two at the same check do not
 STOPPED_VIEWS = 2
+#: ... where one of them misses this much of the part (%), or twice as much of its newest band
+STOPPED_MIN_MISSING_PCT = 1.0
 
 
 def finest_reading(result: ShapeResult) -> float | None:
@@ -606,7 +608,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       only where the view's reading before that read a rise too, the lower of the two: :func:`held_rise`) were a
       rise of ``COARSE_ROSE_BEFORE_PCT`` needs no missing material to corroborate it; nor do ``STOPPED_VIEWS`` such
       views that read no rise now (each its finest reading: fine, else over the span, else coarse), where the
-      median of every view's finest reading reads none either,
+      median of every view's finest reading reads none either, more than a trace (``STOPPED_MIN_MISSING_PCT`` of
+      the part, or twice that of the newest band, in one of them),
       or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
       abstains reports no ``error_pct`` and never fails);
     * or when the cameras together confirm that the newest layers sit sideways on the older ones
@@ -741,16 +744,20 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
         growth = list(coarse.values())
     stalled = stalled or coarse_stalled
     # Views that each held a rise over their last readings (``held_rise_before``) and read none now, STOPPED_VIEWS of
-    # them, stalled with nothing missing yet (a stop late in the interval leaves the newest layers too thin to miss):
-    # a stop is a change, and views that see it at the same check are no pixel step of one view (a top a view
-    # cannot resolve reads 0-200 % by turns). Each view's reading is its finest (fine, else over the span, else
-    # coarse), and their median must read no rise too.
+    # them, stalled with little missing yet (a stop late in the interval leaves the newest layers too thin to miss
+    # half the threshold): a stop is a change, and views that see it at the same check are no pixel step of one view
+    # (a top a view cannot resolve reads 0-200 % by turns). Each view's reading is its finest (fine, else over the
+    # span, else coarse), and their median must read no rise too; a trace of the newest layers must be missing in
+    # one of them (STOPPED_MIN_MISSING_PCT): two views misread a black top on a black bed under JPEG's blocks as
+    # still, with nothing missing (the default set's layer_shift_05 at quality 35).
     readings = {cam: reading for cam, r in usable.items()
                 if (reading := finest_reading(r)) is not None and reading >= -15.0}
-    stopped_views = [cam for cam, reading in readings.items() if reading < settings.min_growth_pct
+    stopped_views = [usable[cam] for cam, reading in readings.items() if reading < settings.min_growth_pct
                      and ((held_rise_before or {}).get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT]
     if (not stalled and not top_closing and len(stopped_views) >= STOPPED_VIEWS
-            and float(np.median(list(readings.values()))) < settings.min_growth_pct):
+            and float(np.median(list(readings.values()))) < settings.min_growth_pct
+            and any(r.missing_pct >= STOPPED_MIN_MISSING_PCT
+                    or (r.band_missing_pct or 0.0) >= 2.0 * STOPPED_MIN_MISSING_PCT for r in stopped_views)):
         stalled, growth = True, list(readings.values())
     size_fail, size_usable = [], 0
     for key, entry in size.items():
