@@ -195,6 +195,9 @@ class LayerShift:
     # newest band, newest first (None: nothing there changes); see with_history
     before: list = field(default_factory=list)
     back_to_first: bool = False   # ``before`` reaches back to the print's first check (see with_history)
+    # every camera it shows to moves the band back to where its own earlier passing checks laid the outline
+    # (see onto_earlier_places): the outline walked off the part, the layers did not move
+    onto_earlier_places: bool = False
 
     @property
     def score(self) -> float:
@@ -224,6 +227,8 @@ class LayerShift:
                    "moved_by": {name: round(float(v)) for name, v in self.moved_by.items()}}
         if self.side_apart is not None:
             figures["side_apart"] = [round(float(v)) for v in self.side_apart]
+        if self.onto_earlier_places:
+            figures["onto_earlier_places"] = True
         if self.before:
             figures["before_confirmed"] = [0.0 if e is None else round(e.confirmed, 3) for e in self.before]
         return figures
@@ -785,7 +790,38 @@ def confirms_layer_shift(shift: LayerShift, min_mm: float) -> bool:
     """
     return ((_confirms(shift, min_mm, SHIFT_CONFIRMED, SHIFT_CONFIRMED_ONE_VIEW) or _confirms_new(shift, min_mm)
              or persists(shift, min_mm))
-            and not was_there_before(shift) and not there_since_first_check(shift))
+            and not was_there_before(shift) and not there_since_first_check(shift) and not shift.onto_earlier_places)
+
+
+#: A camera's image shift of the band lands on one of its earlier places when within this many px (each axis) of it
+#: (the pooled bed shift is read at a rounded image shift) ...
+EARLIER_PLACE_WITHIN_PX = 1
+#: ... which lies at least this many px (each axis, the larger) from where the outline is laid now: closer, the
+#: outline did not move.
+EARLIER_PLACE_MIN_WALK_PX = 2
+
+
+def onto_earlier_places(shift: LayerShift, places: Mapping[str, tuple[tuple[int, int], Sequence[tuple[int, int]]]]
+                        ) -> bool:
+    """Whether every camera ``shift`` shows to (``shift.cameras``, their image shifts) moves the newest band back to
+    where that camera's own earlier passing checks laid the expected outline: ``places`` {camera: (where the outline
+    lies now, the (dx, dy) px of its earlier places)}. A first look on a brim of the part's colour fits the outline
+    equally well along it, and later checks can walk it off the part by a few px each (towards the calibrated
+    position); the newest layers, printed on the part, then sit where the first checks laid it, which reads as a
+    band moved by the walk. A layer shift moves the band by the printer's move, which matches the outline's own walk
+    back in every view it shows to only by chance."""
+    if not shift.cameras:
+        return False
+    for name, (dx, dy) in shift.cameras.items():
+        if name not in places:
+            return False
+        (ax, ay), earlier = places[name]
+        walks = [(px - ax, py - ay) for px, py in earlier
+                 if max(abs(px - ax), abs(py - ay)) >= EARLIER_PLACE_MIN_WALK_PX]
+        if not any(abs(dx - wx) <= EARLIER_PLACE_WITHIN_PX and abs(dy - wy) <= EARLIER_PLACE_WITHIN_PX
+                   for wx, wy in walks):
+            return False
+    return True
 
 
 def describe_layer_shift(shift: LayerShift) -> str:

@@ -24,7 +24,7 @@ from .camera import Camera
 from .errors import PrintWatchError
 from .settings import DetectionSettings
 from .layer_shift import (BandShift, LayerShift, confirms_layer_shift, describe_layer_shift, estimate_layer_shift,
-                          with_history)
+                          onto_earlier_places, with_history)
 from .shape_check import (GROWTH_SPAN_CHECKS, ExpectedRegions, ShapeResult, check_shape,
                           near_any, not_decisive_where_calibrated)
 from .nest import (NEST_MAX_COVERAGE, SOLID_MIN_COVERAGE, STALL_READ_BELOW_GROWTH_PCT, texture_jump_for,
@@ -1161,6 +1161,10 @@ class CheckRunner:
         size = self._size_check(z, frames, shape)
         band_shifts = band_shifts_of(shape)
         layer_shift = layer_shift_of(shape, self.band_shift_history, band_shifts)
+        if layer_shift is not None:
+            # (a band read back where a camera's first checks laid its outline: the outline walked, not the layers)
+            layer_shift.onto_earlier_places = onto_earlier_places(
+                layer_shift, {name: (view.aligned_at, self.cameras[name].placed_at) for name, view in band_shifts.items()})
         self.band_shift_history = [*self.band_shift_history, (self.previous_z is not None, band_shifts)][-4:]
         top_closing = self.plan.top_closing(z)
         # kept for a re-decision on other evidence (bench_detection's shape-only verdict: size={})

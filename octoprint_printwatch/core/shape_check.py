@@ -1202,6 +1202,69 @@ def _not_a_mark(observed: np.ndarray, last_observed: np.ndarray, expected: np.nd
     return observed & ~grown
 
 
+#: A blob of extra material lies on a rod read in a wider view (rods_beyond_the_crop) when this share of its pixels
+#: does (the rod's strip grown by the outline tolerance).
+ROD_BLOB_SHARE = 0.9
+
+
+def cut_by_the_crop(objects: np.ndarray, extra: np.ndarray) -> tuple[bool, bool]:
+    """(across, down): whether an object of ``objects`` ((h, w) bool, the crop's) that holds ``extra`` material runs
+    from the crop's left edge to its right edge, or from its top edge to its bottom edge: its length in the picture
+    is not the crop's to judge."""
+    count, labels = cv2.connectedComponents(objects.astype(np.uint8), connectivity=8)
+    holding = np.zeros(count, bool)
+    holding[labels[extra & objects]] = True
+    holding[0] = False
+
+    def touching(edge: np.ndarray) -> np.ndarray:
+        out = np.zeros(count, bool)
+        out[edge] = True
+        return out
+
+    across = holding & touching(labels[:, 0]) & touching(labels[:, -1])
+    down = holding & touching(labels[0, :]) & touching(labels[-1, :])
+    return bool(across.any()), bool(down.any())
+
+
+def rods_beyond_the_crop(background: np.ndarray, frame: np.ndarray, expected: np.ndarray, search: np.ndarray,
+                         bed_sample: np.ndarray, box: tuple[int, int, int, int], across: bool, shift_bound: int,
+                         tol: float, part_in_place: bool, material_factor: float, bed_factor: float,
+                         palette: np.ndarray | None = None) -> np.ndarray:
+    """(h, w) bool on the crop ``box`` (y0, y1, x0, x1): the rods crossing the search box (masks.crossing_the_box),
+    read in a band of the picture through the crop as wide as the picture (``across``) or as tall. A gantry rod near
+    the camera can be thicker than a slim part's crop is wide: cut by the crop's edges at both ends, it is too short
+    there to tell from a lump of material. Images (h, w, 3); ``expected`` and ``search`` (h, w) bool of the whole
+    picture, aligned; ``bed_sample`` the crop's certain-bed pixels: the exposure gains and noise levels are the
+    crop's (a rod that fills a third of the band would count in a sample drawn from all of it), and ``palette``, the
+    part's colours, keeps sampled pixels of its colour out of them as it did there."""
+    h, w = expected.shape
+    y0, y1, x0, x1 = box
+    wy0, wy1, wx0, wx1 = (y0, y1, 0, w) if across else (0, h, x0, x1)
+    band = (slice(wy0, wy1), slice(wx0, wx1))
+    part = expected[band]
+    distance = cv2.distanceTransform((~part).astype(np.uint8), cv2.DIST_L2, 3)
+    sample = np.zeros(part.shape, bool)
+    sample[y0 - wy0:y1 - wy0, x0 - wx0:x1 - wx0] = bed_sample
+    evidence = material_evidence(background[band], frame[band], distance <= shift_bound + tol + 1, sample,
+                                 material_factor=material_factor, bed_factor=bed_factor, part=distance <= tol,
+                                 palette=palette)
+    grown = outline_zone(part, tol, tol)
+    outside = clean_mask(evidence.material) & ~grown
+    rods = crossing_the_box(outside | (~evidence.bed & ~grown), search[band] | (distance <= tol), grown,
+                            part_in_place=part_in_place, material=outside)
+    return rods[y0 - wy0:y1 - wy0, x0 - wx0:x1 - wx0]
+
+
+def blobs_lying_on(mask: np.ndarray, zone: np.ndarray, share: float) -> np.ndarray:
+    """(h, w) bool: the blobs of ``mask`` with at least ``share`` of their pixels in ``zone``."""
+    count, labels = cv2.connectedComponents(mask.astype(np.uint8), connectivity=8)
+    area = np.bincount(labels.ravel(), minlength=count)
+    inside = np.bincount(labels[zone & mask], minlength=count)
+    lying = inside >= share * np.maximum(area, 1)
+    lying[0] = False
+    return lying[labels]
+
+
 def compare_masks(
     observed: np.ndarray,
     bed: np.ndarray,
@@ -1540,6 +1603,25 @@ def check_shape(
                                flat_max_px=regions.flat_max_px, reflection=reflection_placed,
                                top_tolerance=tol, linked=~evidence.bed, not_the_prints=not_the_prints,
                                foreign_before=followed_before)
+    on_rods = None
+    if comparison.extra.any() and (x1 - x0 < w or y1 - y0 < h):
+        # a rod near the camera, thicker than this crop is wide, is read in a wider view (rods_beyond_the_crop)
+        across, down = cut_by_the_crop(observed, comparison.extra)
+        if across or down:
+            rods = rods_beyond_the_crop(background, frame, shift_mask(expected_full, dx, dy),
+                                        shift_mask(regions.search.astype(bool), dx, dy),
+                                        bed_sample, box, across, shift_bound,
+                                        tol, comparison.part_in_place, material_factor, bed_factor, palette)
+            if rods.any():
+                on_rods = dilate(rods, tol)
+                comparison = compare_masks(observed, bed_evidence, expected_a, band_a, search_a,
+                                           dont_care_a, tol, band_reach=max(2 * tol, shift_bound),
+                                           flat_max_px=regions.flat_max_px, reflection=reflection_placed,
+                                           top_tolerance=tol, linked=~evidence.bed,
+                                           not_the_prints=lambda extra: (not_the_prints(extra)
+                                                                         | blobs_lying_on(extra, on_rods,
+                                                                                          ROD_BLOB_SHARE)),
+                                           foreign_before=followed_before)
 
     # Growth since the previous check: the same camera, the same processing, so calibration and
     # alignment errors cancel; a part that stopped growing (runout, clog, spaghetti) shows none of the
@@ -1631,7 +1713,10 @@ def check_shape(
     if seen_before is not None:
         new_outside = new_material(observed, seen_before, expected_a, search_a, tol, regions.px_per_mm,
                                    ignore=reflection_a, marks=dont_care_a, linked=~evidence.bed,
-                                   bed_to_image=regions.bed_to_image, not_the_prints=not_part_colour,
+                                   bed_to_image=regions.bed_to_image,
+                                   not_the_prints=(not_part_colour if on_rods is None else
+                                                   lambda blobs: (not_part_colour(blobs)
+                                                                  | blobs_lying_on(blobs, on_rods, ROD_BLOB_SHARE))),
                                    # (compare_masks' objects from above, on the same masks: the same
                                    # answer, unless it followed objects of the previous check)
                                    foreign=(comparison.foreign if comparison.foreign is not None
