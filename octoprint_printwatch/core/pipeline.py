@@ -592,7 +592,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       checks (``ShapeResult.span_growth_pct``) stands in for the fine rules, and a view whose own readings before
       (``span_rise_before``: fine, else over the span, at its previous check; CheckRunner passes it only where
       the view's reading before that read a rise too, the lower of the two: :func:`held_rise`) were a rise of
-      ``COARSE_ROSE_BEFORE_PCT`` needs no missing material to corroborate it,
+      ``COARSE_ROSE_BEFORE_PCT`` needs no missing material to corroborate it (nor does a view's one-check reading:
+      a stop is a change, while strands piled on a stopped part fill its outline),
       or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
       abstains reports no ``error_pct`` and never fails);
     * or when the cameras together confirm that the newest layers sit sideways on the older ones
@@ -671,7 +672,12 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
 
     measured = {cam: r for cam, r in usable.items() if r.growth_pct is not None and r.growth_pct >= -15.0}
     growth = [r.growth_pct for r in measured.values()]
-    stalled, bare_band = stall_rules({cam: r.growth_pct for cam, r in measured.items()})
+    # A stop is a change: a view whose own readings at its previous checks read the part rising (``span_rise_before``,
+    # held_rise) needs no missing material to corroborate a one-check reading of no rise either. Strands piled on a
+    # stopped part fill its outline (nothing reads missing), while a top the camera cannot tell from what lies behind
+    # it never reads a rise at two checks running.
+    rose_before = {cam for cam in measured if ((span_rise_before or {}).get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT}
+    stalled, bare_band = stall_rules({cam: r.growth_pct for cam, r in measured.items()}, rose_before)
     growth_since = "since the previous check"
     # Where one check's rise is too small for any reading in a view (2-3 px: a part seen small, checks a few
     # layers apart), its reading over more checks (``ShapeResult.span_growth_pct``, as fine, but from an older
