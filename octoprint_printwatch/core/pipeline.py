@@ -443,15 +443,15 @@ COARSE_ROSE_BEFORE_PCT = 50.0
 RISE_HELD_READINGS = 2
 
 
-#: A view reading at least this share of the expected rise (fine, else over its span) saw the part rise as the model
+#: A view reading at least this share of the expected rise (fine, over its span or coarse) saw the part rise as the model
 #: says: a stop that no view shows as missing material does not stand against it (decide).
 FULL_RISE_PCT = 100.0
 
 
 def rise_read(r: ShapeResult) -> float:
-    """A view's reading of the rise at this check (% of the expected): fine, else over its span, else 0 (none)."""
-    reading = r.growth_pct if r.growth_pct is not None else r.span_growth_pct
-    return 0.0 if reading is None else float(reading)
+    """A view's highest reading of the rise at this check (% of the expected): fine, over its span or coarse; 0 (none)."""
+    readings = [x for x in (r.growth_pct, r.span_growth_pct, r.coarse_growth_pct) if x is not None]
+    return float(max(readings, default=0.0))
 
 
 def held_rise(at_previous: float | None, readings: Sequence[float]) -> float | None:
@@ -686,10 +686,13 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     # A stop is a change: a view whose own readings at its previous checks read the part rising (``span_rise_before``,
     # held_rise) needs no missing material to corroborate a one-check reading of no rise either. Strands piled on a
     # stopped part fill its outline (nothing reads missing), while a top the camera cannot tell from what lies behind
-    # it never reads a rise at two checks running. Not while a view reads the part rising as expected (fine, else over
-    # its span): a stop shows in every view, and with nothing missing nothing else stands against that view (a top
+    # it never reads a rise at two checks running. Not while a view reads the part rising as expected (fine, over its
+    # span or coarse): a stop shows in every view, and with nothing missing nothing else stands against that view (a top
     # misread at one check reads 0 in one view and twice the rise in another, then rises again).
-    rose_before = set() if any(rise_read(r) >= FULL_RISE_PCT for r in usable.values()) else {
+    # Nor while a view's one-check reading still reads some rise: only where every one reads a stall (a view reading
+    # -8 % beside one reading 29 % over a face it misses all along is a resized frame's pixel step, not a stop).
+    unanimous = all(r.growth_pct < settings.min_growth_pct for r in measured.values())
+    rose_before = set() if not unanimous or any(rise_read(r) >= FULL_RISE_PCT for r in usable.values()) else {
         cam for cam in measured if ((span_rise_before or {}).get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT}
     stalled, bare_band = stall_rules({cam: r.growth_pct for cam, r in measured.items()}, rose_before)
     growth_since = "since the previous check"

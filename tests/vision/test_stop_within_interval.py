@@ -79,3 +79,11 @@ def test_a_one_check_reading_of_no_rise_right_after_reading_a_rise_stalled_with_
     # shows missing
     misread = {"s0": fine("s0", 0.0), "s2": fine("s2", 0.0), "s1": fine("s1", 200.0)}
     assert decide(misread, {}, s, span_rise_before={"s0": 96.8, "s2": 87.0, "s1": 50.0})[0] == "ok"
+    # nor while another view's one-check reading still reads some rise (seed 10 003_normal resized to 75 %: s1L
+    # -8 % after 100 / 100 %, s0R 29 % over a face it misses at every check)
+    resized = {"s1L": fine("s1L", -8.3), "s0R": fine("s0R", 29.4, missing=60.4, band_missing=84.0)}
+    assert decide(resized, {}, s, span_rise_before={"s1L": 100.0})[0] == "ok"
+    # ... nor while a view's coarse reading sees the full rise (seed 10 037_detach blurred: s1 0 % after 175 / 75 %,
+    # s0R coarse 125 %)
+    blurred = {"s1": fine("s1", 0.0), "s0R": view("s0R", coarse=125.0, missing=22.6, band_missing=36.2)}
+    assert decide(blurred, {}, s, span_rise_before={"s1": 75.0})[0] == "ok"
