@@ -456,6 +456,17 @@ def finest_reading(result: ShapeResult) -> float | None:
 RISE_HELD_READINGS = 2
 
 
+#: A view reading at least this share of the expected rise (fine, over its span or coarse) saw the part rise as the model
+#: says: a stop that no view shows as missing material does not stand against it (decide).
+FULL_RISE_PCT = 100.0
+
+
+def rise_read(r: ShapeResult) -> float:
+    """A view's highest reading of the rise at this check (% of the expected): fine, over its span or coarse; 0 (none)."""
+    readings = [x for x in (r.growth_pct, r.span_growth_pct, r.coarse_growth_pct) if x is not None]
+    return float(max(readings, default=0.0))
+
+
 def held_rise(at_previous: float | None, readings: Sequence[float]) -> float | None:
     """The rise (% of the expected) a view read at its previous check (``at_previous``: fine, else over the span;
     None: neither) where its readings before held it: the lowest of it and its last :data:`RISE_HELD_READINGS`
@@ -606,10 +617,12 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       checks (``ShapeResult.span_growth_pct``) stands in for the fine rules, and a view whose own readings before
       (``held_rise_before``: fine, else over the span, else coarse, at its previous check; CheckRunner passes it
       only where the view's reading before that read a rise too, the lower of the two: :func:`held_rise`) were a
-      rise of ``COARSE_ROSE_BEFORE_PCT`` needs no missing material to corroborate it; nor do ``STOPPED_VIEWS`` such
-      views that read no rise now (each its finest reading: fine, else over the span, else coarse), where the
-      median of every view's finest reading reads none either, more than a trace (``STOPPED_MIN_MISSING_PCT`` of
-      the part, or twice that of the newest band, in one of them),
+      rise of ``COARSE_ROSE_BEFORE_PCT`` needs no missing material to corroborate it (nor does a view's one-check
+      reading, while every one-check reading reads a stall and no view the full rise: a stop is a change, while
+      strands piled on a stopped part fill its outline); nor do ``STOPPED_VIEWS`` such views that read no rise now
+      (each its finest reading: fine, else over the span, else coarse), where the median of every view's finest
+      reading reads none either, more than a trace (``STOPPED_MIN_MISSING_PCT`` of the part, or twice that of the
+      newest band, in one of them),
       or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
       abstains reports no ``error_pct`` and never fails);
     * or when the cameras together confirm that the newest layers sit sideways on the older ones
@@ -694,7 +707,18 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
 
     measured = {cam: r for cam, r in usable.items() if r.growth_pct is not None and r.growth_pct >= -15.0}
     growth = [r.growth_pct for r in measured.values()]
-    stalled, bare_band = stall_rules({cam: r.growth_pct for cam, r in measured.items()})
+    # A stop is a change: a view whose own readings at its previous checks read the part rising (``held_rise_before``,
+    # held_rise) needs no missing material to corroborate a one-check reading of no rise either. Strands piled on a
+    # stopped part fill its outline (nothing reads missing), while a top the camera cannot tell from what lies behind
+    # it never reads a rise at two checks running. Not while a view reads the part rising as expected (fine, over its
+    # span or coarse): a stop shows in every view, and with nothing missing nothing else stands against that view (a top
+    # misread at one check reads 0 in one view and twice the rise in another, then rises again).
+    # Nor while a view's one-check reading still reads some rise: only where every one reads a stall (a view reading
+    # -8 % beside one reading 29 % over a face it misses all along is a resized frame's pixel step, not a stop).
+    unanimous = all(r.growth_pct < settings.min_growth_pct for r in measured.values())
+    rose_before = set() if not unanimous or any(rise_read(r) >= FULL_RISE_PCT for r in usable.values()) else {
+        cam for cam in measured if ((held_rise_before or {}).get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT}
+    stalled, bare_band = stall_rules({cam: r.growth_pct for cam, r in measured.items()}, rose_before)
     growth_since = "since the previous check"
     # Where one check's rise is too small for any reading in a view (2-3 px: a part seen small, checks a few
     # layers apart), its reading over more checks (``ShapeResult.span_growth_pct``, as fine, but from an older
