@@ -101,11 +101,13 @@ HEIGHT_NULL_TOLERANCE_PX = 1
 #: on, which "2.7 mm shorter" explained as well as the shift, 663 against 665; the checks before read it in place).
 HEIGHT_NULL_REFUTED_PX = 60.0
 HEIGHT_NULL_REFUTED_CHECKS = 2
-#: The print's first check is one reading that counts as that many, while it is one of the last four checks: its band
-#: is the whole part, so its null reads the whole part's top against the outline aligned on all of it, where a height
-#: error shows from the first layer on. A layer shift in the first tested band has no other reading before it
-#: (cross-check seed 14 `043`: a cone's top moved along s0's line of sight, "1.4 mm taller" scored 788 against the
-#: shift's 549 at the onset check, while the first check read that height at -626).
+#: The print's first check is one reading that counts as that many for a part standing *taller*, while it is one of
+#: the last four checks: its band is the whole part, so its null reads the whole part's top against the outline aligned
+#: on all of it, where a height error shows from the first layer on. A layer shift in the first tested band has no other
+#: reading before it (cross-check seed 14 `043`: a cone's top moved along s0's line of sight, "1.4 mm taller" scored 788
+#: against the shift's 549 at the onset check, while the first check read that height at -626). Only taller: the way one
+#: reading is known to be off, a top in the bed's colour, reads the top lower later, never material above it
+#: (cross-check seed 10 `054_spaghetti` s0, natural on kapton: its top 7 px low at check 2, before any failure).
 #: (camera name, (m,) heights mm) -> (m,) bool: the heights that camera's earlier checks refute (_refuted_heights)
 RefutedHeights = Callable[[str, np.ndarray], np.ndarray]
 
@@ -421,7 +423,7 @@ def estimate_layer_shift(views: Mapping[str, BandShift], *, max_mm: float = 8.0,
     support - 2 x against summed over cameras. Cameras without ``bed_to_image`` cannot take part.
     ``earlier``: the views of earlier checks that tested their own band; a camera's support for a height its own
     readings there refute does not count in the null (HEIGHT_NULL_REFUTED_PX); ``first``: the views of the print's
-    first check, whose reading alone refutes (HEIGHT_NULL_REFUTED_CHECKS). None when no shift shows clearly
+    first check, whose reading alone refutes a taller part (HEIGHT_NULL_REFUTED_CHECKS). None when no shift shows clearly
     to any camera.
     """
     refuted = _refuted_heights(earlier, views, first)
@@ -464,8 +466,8 @@ def _refuted_heights(earlier: Sequence[Mapping[str, BandShift]],
     slipped up since (a slide onto the part's reflection) shows the top standing lower from then on, which the
     checks before the slip read in place against their own outline, and so do not refute. The move is counted less
     HEIGHT_NULL_TOLERANCE_PX: an anchored outline wobbles by a pixel, which this check's null already allows.
-    ``first``: the print's first check's views, one reading that counts as HEIGHT_NULL_REFUTED_CHECKS (its band is
-    the whole part; see there)."""
+    ``first``: the print's first check's views, one reading that counts as HEIGHT_NULL_REFUTED_CHECKS for heights
+    above the model's (its band is the whole part; see there)."""
     readings: dict[str, list] = {}
     weighted = [(views, 1) for views in earlier] + ([(first, HEIGHT_NULL_REFUTED_CHECKS)] if first else [])
     for views, counts in weighted:
@@ -489,7 +491,9 @@ def _refuted_heights(earlier: Sequence[Mapping[str, BandShift]],
         for scores, k, slipped, counts in readings.get(name, ()):
             r = len(scores) // 2
             there = np.rint(heights * k).astype(int) + slipped
-            out += counts * (scores[np.clip(there + r, 0, 2 * r)] <= -HEIGHT_NULL_REFUTED_PX)
+            # (the first check's reading counts as several only for a taller part: see HEIGHT_NULL_REFUTED_CHECKS)
+            weight = np.where(heights > 0, counts, min(counts, 1))
+            out += weight * (scores[np.clip(there + r, 0, 2 * r)] <= -HEIGHT_NULL_REFUTED_PX)
         return (out >= HEIGHT_NULL_REFUTED_CHECKS) & (heights != 0)
     return refuted
 
