@@ -101,6 +101,13 @@ HEIGHT_NULL_TOLERANCE_PX = 1
 #: on, which "2.7 mm shorter" explained as well as the shift, 663 against 665; the checks before read it in place).
 HEIGHT_NULL_REFUTED_PX = 60.0
 HEIGHT_NULL_REFUTED_CHECKS = 2
+#: The print's first check is one reading that counts as that many for a part standing *taller*, while it is one of
+#: the last four checks: its band is the whole part, so its null reads the whole part's top against the outline aligned
+#: on all of it, where a height error shows from the first layer on. A layer shift in the first tested band has no other
+#: reading before it (cross-check seed 14 `043`: a cone's top moved along s0's line of sight, "1.4 mm taller" scored 788
+#: against the shift's 549 at the onset check, while the first check read that height at -626). Only taller: the way one
+#: reading is known to be off, a top in the bed's colour, reads the top lower later, never material above it
+#: (cross-check seed 10 `054_spaghetti` s0, natural on kapton: its top 7 px low at check 2, before any failure).
 #: (camera name, (m,) heights mm) -> (m,) bool: the heights that camera's earlier checks refute (_refuted_heights)
 RefutedHeights = Callable[[str, np.ndarray], np.ndarray]
 
@@ -412,17 +419,19 @@ def _band_shift_maps(evidence: _Evidence, before: np.ndarray, band: np.ndarray, 
 
 
 def estimate_layer_shift(views: Mapping[str, BandShift], *, max_mm: float = 8.0,
-                         step_mm: float = 0.25, earlier: Sequence[Mapping[str, BandShift]] = ()) -> LayerShift | None:
+                         step_mm: float = 0.25, earlier: Sequence[Mapping[str, BandShift]] = (),
+                         first: Mapping[str, BandShift] | None = None) -> LayerShift | None:
     """The bed shift (printer X/Y, mm, within ``max_mm``) the cameras' evidence confirms best together.
 
     Each camera contributes its support, against and moved pixels at its own image shift ``J @ D``
     (nearest pixel), weighted by how clearly that shift shows sideways in it (see below); the score is
     support - 2 x against summed over cameras. Cameras without ``bed_to_image`` cannot take part.
     ``earlier``: the views of earlier checks that tested their own band; a camera's support for a height its own
-    readings there refute does not count in the null (HEIGHT_NULL_REFUTED_PX). None when no shift shows clearly
+    readings there refute does not count in the null (HEIGHT_NULL_REFUTED_PX); ``first``: the views of the print's
+    first check, whose reading alone refutes a taller part (HEIGHT_NULL_REFUTED_CHECKS). None when no shift shows clearly
     to any camera.
     """
-    refuted = _refuted_heights(earlier, views)
+    refuted = _refuted_heights(earlier, views, first)
     steps = np.arange(-max_mm, max_mm + 1e-9, step_mm)
     gx, gy = np.meshgrid(steps, steps)
     grid = np.stack([gx.ravel(), gy.ravel()], axis=1)
@@ -450,7 +459,8 @@ def layer_shift_at(views: Mapping[str, BandShift], shift_mm, within_mm: float = 
 
 
 def _refuted_heights(earlier: Sequence[Mapping[str, BandShift]],
-                     now: Mapping[str, BandShift] | None = None) -> RefutedHeights | None:
+                     now: Mapping[str, BandShift] | None = None,
+                     first: Mapping[str, BandShift] | None = None) -> RefutedHeights | None:
     """A function of a camera's name and (m,) heights (mm; its top moves by height x its image y px per mm of height)
     giving (m,) bool: the heights HEIGHT_NULL_REFUTED_CHECKS of that camera's readings at the ``earlier`` checks read
     clearly wrong (HEIGHT_NULL_REFUTED_PX); None when no camera has that many readings.
@@ -460,9 +470,12 @@ def _refuted_heights(earlier: Sequence[Mapping[str, BandShift]],
     a height is read there where it puts the top in the image now (``BandShift.aligned_at``): an outline that
     slipped up since (a slide onto the part's reflection) shows the top standing lower from then on, which the
     checks before the slip read in place against their own outline, and so do not refute. The move is counted less
-    HEIGHT_NULL_TOLERANCE_PX: an anchored outline wobbles by a pixel, which this check's null already allows."""
+    HEIGHT_NULL_TOLERANCE_PX: an anchored outline wobbles by a pixel, which this check's null already allows.
+    ``first``: the print's first check's views, one reading that counts as HEIGHT_NULL_REFUTED_CHECKS for heights
+    above the model's (its band is the whole part; see there)."""
     readings: dict[str, list] = {}
-    for views in earlier:
+    weighted = [(views, 1) for views in earlier] + ([(first, HEIGHT_NULL_REFUTED_CHECKS)] if first else [])
+    for views, counts in weighted:
         for name, view in views.items():
             if view.null_scores is not None and view.height_to_image is not None:
                 current = (now or {}).get(name)
@@ -470,8 +483,9 @@ def _refuted_heights(earlier: Sequence[Mapping[str, BandShift]],
                 # (a pixel of it is the alignment's own wobble, within the residual this check's null allows)
                 slipped = int(np.sign(moved)) * max(abs(moved) - HEIGHT_NULL_TOLERANCE_PX, 0)
                 readings.setdefault(name, []).append((view.null_scores.astype(np.float64),
-                                                      float(view.height_to_image[1]), slipped))
-    readings = {name: read for name, read in readings.items() if len(read) >= HEIGHT_NULL_REFUTED_CHECKS}
+                                                      float(view.height_to_image[1]), slipped, counts))
+    readings = {name: read for name, read in readings.items()
+                if sum(counts for *_, counts in read) >= HEIGHT_NULL_REFUTED_CHECKS}
     if not readings:
         return None
 
@@ -479,10 +493,12 @@ def _refuted_heights(earlier: Sequence[Mapping[str, BandShift]],
         out = np.zeros(len(heights), int)
         # (each reading untolerant: the camera's calibration residual is the same at every check, and the null of
         # this check already allows it)
-        for scores, k, slipped in readings.get(name, ()):
+        for scores, k, slipped, counts in readings.get(name, ()):
             r = len(scores) // 2
             there = np.rint(heights * k).astype(int) + slipped
-            out += scores[np.clip(there + r, 0, 2 * r)] <= -HEIGHT_NULL_REFUTED_PX
+            # (the first check's reading counts as several only for a taller part: see HEIGHT_NULL_REFUTED_CHECKS)
+            weight = np.where(heights > 0, counts, min(counts, 1))
+            out += weight * (scores[np.clip(there + r, 0, 2 * r)] <= -HEIGHT_NULL_REFUTED_PX)
         return (out >= HEIGHT_NULL_REFUTED_CHECKS) & (heights != 0)
     return refuted
 

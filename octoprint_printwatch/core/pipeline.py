@@ -410,9 +410,12 @@ def layer_shift_of(shape: Mapping[str, ShapeResult],
     for the same shift at those checks (``core.layer_shift.with_history``). ``band_shifts``: this check's
     ``band_shifts_of(shape)`` when the caller has it already.
     """
-    earlier = [views for tested, views in list(history)[-4:] if tested and views]
+    recent = list(history)[-4:]
+    earlier = [views for tested, views in recent if tested and views]
+    # (the print's first check, while among them: its band is the whole part, its top the part's height)
+    first = next((views for tested, views in recent if not tested and views), None)
     return with_history(estimate_layer_shift(band_shifts_of(shape) if band_shifts is None else band_shifts,
-                                             earlier=earlier), history)
+                                             earlier=earlier, first=first), history)
 
 
 def unseen_by_partner(result: ShapeResult, usable: Mapping[str, ShapeResult], pairs: Sequence[Sequence[str]],

@@ -47,7 +47,7 @@ def test_a_part_standing_lower_at_the_checks_before_too_is_still_explained_by_th
 def test_one_earlier_reading_or_another_cameras_readings_do_not_refute_it():
     # one reading in place can be off itself (a top the colour of the bed); another camera's top in place says
     # nothing about this camera's own error (cross-check seed 8 `028_runout`: s1R alone, usable from one check on)
-    once = layer_shift_of({}, [(False, IN_PLACE), (True, IN_PLACE)], SHIFTED)
+    once = layer_shift_of({}, [(False, {}), (True, IN_PLACE)], SHIFTED)
     assert once is None or not confirms_layer_shift(once, 1.5)
     elsewhere = {"other": IN_PLACE["cam"]}
     others = layer_shift_of({}, [(False, elsewhere), (True, elsewhere), (True, elsewhere)], SHIFTED)
