@@ -101,13 +101,13 @@ HEIGHT_NULL_TOLERANCE_PX = 1
 #: on, which "2.7 mm shorter" explained as well as the shift, 663 against 665; the checks before read it in place).
 HEIGHT_NULL_REFUTED_PX = 60.0
 HEIGHT_NULL_REFUTED_CHECKS = 2
-#: The print's first check is one reading that counts as that many for a part standing *taller*, while it is one of
-#: the last four checks: its band is the whole part, so its null reads the whole part's top against the outline aligned
-#: on all of it, where a height error shows from the first layer on. A layer shift in the first tested band has no other
-#: reading before it (cross-check seed 14 `043`: a cone's top moved along s0's line of sight, "1.4 mm taller" scored 788
-#: against the shift's 549 at the onset check, while the first check read that height at -626). Only taller: the way one
-#: reading is known to be off, a top in the bed's colour, reads the top lower later, never material above it
-#: (cross-check seed 10 `054_spaghetti` s0, natural on kapton: its top 7 px low at check 2, before any failure).
+# The print's first check is one reading that counts as that many for a part standing *taller*, while it is one of
+# the last four checks: its band is the whole part, so its null reads the whole part's top against the outline aligned
+# on all of it, where a height error shows from the first layer on. A layer shift in the first tested band has no other
+# reading before it (cross-check seed 14 `043`: a cone's top moved along s0's line of sight, "1.4 mm taller" scored 788
+# against the shift's 549 at the onset check, while the first check read that height at -626). Only taller: the way one
+# reading is known to be off, a top in the bed's colour, reads the top lower later, never material above it
+# (cross-check seed 10 `054_spaghetti` s0, natural on kapton: its top 7 px low at check 2, before any failure).
 #: (camera name, (m,) heights mm) -> (m,) bool: the heights that camera's earlier checks refute (_refuted_heights)
 RefutedHeights = Callable[[str, np.ndarray], np.ndarray]
 
