@@ -428,8 +428,8 @@ def estimate_layer_shift(views: Mapping[str, BandShift], *, max_mm: float = 8.0,
     support - 2 x against summed over cameras. Cameras without ``bed_to_image`` cannot take part.
     ``earlier``: the views of earlier checks that tested their own band; a camera's support for a height its own
     readings there refute does not count in the null (HEIGHT_NULL_REFUTED_PX); ``first``: the views of the print's
-    first check, whose reading alone refutes a taller part (HEIGHT_NULL_REFUTED_CHECKS). None when no shift shows clearly
-    to any camera.
+    first check, whose reading alone refutes a taller part (HEIGHT_NULL_REFUTED_CHECKS). None when no shift shows
+    clearly to any camera.
     """
     refuted = _refuted_heights(earlier, views, first)
     steps = np.arange(-max_mm, max_mm + 1e-9, step_mm)

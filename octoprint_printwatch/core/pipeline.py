@@ -459,22 +459,24 @@ def finest_reading(result: ShapeResult) -> float | None:
 RISE_HELD_READINGS = 2
 
 
-#: A view reading at least this share of the expected rise (fine, over its span or coarse) saw the part rise as the model
-#: says: a stop that no view shows as missing material does not stand against it (decide).
+#: A view reading at least this share of the expected rise (fine, over its span or coarse) saw the part rise as the
+#: model says: a stop that no view shows as missing material does not stand against it (decide).
 FULL_RISE_PCT = 100.0
 
 
 def rise_read(r: ShapeResult) -> float:
-    """A view's highest reading of the rise at this check (% of the expected): fine, over its span or coarse; 0 (none)."""
+    """A view's highest reading of the rise at this check (% of the expected): fine, over its span or coarse;
+    0 (none)."""
     readings = [x for x in (r.growth_pct, r.span_growth_pct, r.coarse_growth_pct) if x is not None]
     return float(max(readings, default=0.0))
 
 
 def held_rise(at_previous: float | None, readings: Sequence[float]) -> float | None:
-    """The rise (% of the expected) a view read at its previous check (``at_previous``: fine, else over the span;
-    None: neither) where its readings before held it: the lowest of it and its last :data:`RISE_HELD_READINGS`
-    readings (``readings``: fine, else over the span, else coarse, at its checks that gave one since it was last
-    unusable, oldest first, the previous check's last), or None (no reading then, or too few readings)."""
+    """The rise (% of the expected) a view read at its previous check (``at_previous``: its finest reading there, fine,
+    else over the span, else coarse; None: none) where its readings before held it: the lowest of it and its last
+    :data:`RISE_HELD_READINGS` readings (``readings``: fine, else over the span, else coarse, at its checks that gave
+    one since it was last unusable, oldest first, the previous check's last), or None (no reading then, or too few
+    readings)."""
     if at_previous is None or len(readings) < RISE_HELD_READINGS:
         return None
     return float(min(at_previous, *readings[-RISE_HELD_READINGS:]))
@@ -624,8 +626,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       reading, while every one-check reading reads a stall and no view the full rise: a stop is a change, while
       strands piled on a stopped part fill its outline); nor do ``STOPPED_VIEWS`` such views that read no rise now
       (each its finest reading: fine, else over the span, else coarse), where the median of every view's finest
-      reading reads none either, more than a trace (``STOPPED_MIN_MISSING_PCT`` of the part, or twice that of the
-      newest band, in one of them),
+      reading reads none either, need more than a trace (``STOPPED_MIN_MISSING_PCT`` of the part, or twice that of
+      the newest band, in one of them),
       or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
       abstains reports no ``error_pct`` and never fails);
     * or when the cameras together confirm that the newest layers sit sideways on the older ones
@@ -1190,8 +1192,8 @@ class CheckRunner:
         layer_shift = layer_shift_of(shape, self.band_shift_history, band_shifts)
         if layer_shift is not None:
             # (a band read back where a camera's first checks laid its outline: the outline walked, not the layers)
-            layer_shift.onto_earlier_places = onto_earlier_places(
-                layer_shift, {name: (view.aligned_at, self.cameras[name].placed_at) for name, view in band_shifts.items()})
+            places = {name: (view.aligned_at, self.cameras[name].placed_at) for name, view in band_shifts.items()}
+            layer_shift.onto_earlier_places = onto_earlier_places(layer_shift, places)
         self.band_shift_history = [*self.band_shift_history, (self.previous_z is not None, band_shifts)][-4:]
         top_closing = self.plan.top_closing(z)
         # kept for a re-decision on other evidence (bench_detection's shape-only verdict: size={})
