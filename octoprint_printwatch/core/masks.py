@@ -13,6 +13,15 @@ def components(mask: np.ndarray) -> tuple[int, np.ndarray, np.ndarray]:
     return count, labels, np.bincount(labels.ravel(), minlength=count)
 
 
+def blobs_lying_on(mask: np.ndarray, zone: np.ndarray, share: float) -> np.ndarray:
+    """(h, w) bool: the blobs of ``mask`` with at least ``share`` of their pixels in ``zone`` (both (h, w) bool)."""
+    count, labels, area = components(mask)
+    inside = np.bincount(labels[zone & mask], minlength=count)
+    lying = inside >= share * np.maximum(area, 1)
+    lying[0] = False
+    return lying[labels]
+
+
 def lowest_rows(labels: np.ndarray, asked: np.ndarray) -> np.ndarray:
     """(count,) int64: the lowest row of each label ``asked`` ((count,) bool) in ``labels`` ((h, w) int), -1 for
     the others (the row cv2.connectedComponentsWithStats' top + height - 1 gives, for the labels read)."""

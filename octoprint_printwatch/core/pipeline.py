@@ -471,15 +471,14 @@ def rise_read(r: ShapeResult) -> float:
     return float(max(readings, default=0.0))
 
 
-def held_rise(at_previous: float | None, readings: Sequence[float]) -> float | None:
-    """The rise (% of the expected) a view read at its previous check (``at_previous``: its finest reading there, fine,
-    else over the span, else coarse; None: none) where its readings before held it: the lowest of it and its last
-    :data:`RISE_HELD_READINGS` readings (``readings``: fine, else over the span, else coarse, at its checks that gave
-    one since it was last unusable, oldest first, the previous check's last), or None (no reading then, or too few
-    readings)."""
-    if at_previous is None or len(readings) < RISE_HELD_READINGS:
+def held_rise(readings: Sequence[float], read_at_previous: bool) -> float | None:
+    """The rise (% of the expected) a view read at its previous check where its readings before held it: the lowest
+    of its last :data:`RISE_HELD_READINGS` readings (``readings``: its finest, fine, else over the span, else coarse,
+    at its checks that gave one since it was last unusable, oldest first), or None where the previous check gave no
+    reading (``read_at_previous`` False) or too few readings were given."""
+    if not read_at_previous or len(readings) < RISE_HELD_READINGS:
         return None
-    return float(min(at_previous, *readings[-RISE_HELD_READINGS:]))
+    return float(min(readings[-RISE_HELD_READINGS:]))
 
 
 #: A view keeps its missing material from its last rising check (missing_since_rise) for at most this many
@@ -987,12 +986,11 @@ class CameraState:
     older_observed: list = field(default_factory=list)
     #: the growth it read at its last usable check (None: it could not measure one)
     last_growth: float | None = None
-    #: its reading of the rise at the previous check: fine, else over several checks, else coarse (None: none, or
-    #: not usable there): held_rise, for decide's span and coarse stall rules
-    last_reading: float | None = None
     #: its last RISE_HELD_READINGS readings of the rise (fine, else over the span, else coarse) at the checks that
-    #: gave one since it was last unusable, oldest first: held_rise
+    #: gave one since it was last unusable, oldest first, and whether its previous check gave one: held_rise, for
+    #: decide's stall rules
     rise_readings: tuple[float, ...] = ()
+    read_rise_last_check: bool = False
     #: its extra material at the previous check (None: not usable there)
     last_extra: float | None = None
     #: its growth reading at the previous check, fine or else coarse (None: none), and its missing material
@@ -1090,7 +1088,7 @@ class CheckRunner:
         extra_before = {name: state.last_extra for name, state in self.cameras.items() if state.last_extra is not None}
         rise_before = {name: state.last_rise for name, state in self.cameras.items() if state.last_rise is not None}
         held_rise_before = {name: rise for name, state in self.cameras.items()
-                            if (rise := held_rise(state.last_reading, state.rise_readings)) is not None}
+                            if (rise := held_rise(state.rise_readings, state.read_rise_last_check)) is not None}
         missing_before = {name: state.last_missing for name, state in self.cameras.items()
                           if state.last_missing is not None}
         missing_at_rise = {name: state.rise_missing for name, state in self.cameras.items()
@@ -1192,8 +1190,8 @@ class CheckRunner:
         layer_shift = layer_shift_of(shape, self.band_shift_history, band_shifts)
         if layer_shift is not None:
             # (a band read back where a camera's first checks laid its outline: the outline walked, not the layers)
-            places = {name: (view.aligned_at, self.cameras[name].placed_at) for name, view in band_shifts.items()}
-            layer_shift.onto_earlier_places = onto_earlier_places(layer_shift, places)
+            outlines = {name: (view.aligned_at, self.cameras[name].placed_at) for name, view in band_shifts.items()}
+            layer_shift.onto_earlier_places = onto_earlier_places(layer_shift, outlines)
         self.band_shift_history = [*self.band_shift_history, (self.previous_z is not None, band_shifts)][-4:]
         top_closing = self.plan.top_closing(z)
         # kept for a re-decision on other evidence (bench_detection's shape-only verdict: size={})
@@ -1208,7 +1206,7 @@ class CheckRunner:
             r = shape.get(name)
             if r is None or not r.usable:
                 state.last_extra = state.last_rise = state.last_missing = state.last_foreign = None
-                state.last_reading, state.rise_readings = None, ()
+                state.read_rise_last_check, state.rise_readings = False, ()
                 state.rise_missing, state.rise_quiet = None, 0
                 state.last_band_texture = None
                 state.missing_while_rising = None
@@ -1217,7 +1215,7 @@ class CheckRunner:
             state.last_extra, state.last_missing, state.last_foreign = r.extra_pct, r.missing_pct, r.foreign_mask
             rise_before_this = state.last_rise
             reading = finest_reading(r)
-            state.last_reading = reading
+            state.read_rise_last_check = reading is not None
             if reading is not None:
                 state.rise_readings = (*state.rise_readings, reading)[-RISE_HELD_READINGS:]
             state.last_rise = r.growth_pct if r.growth_pct is not None else r.coarse_growth_pct

@@ -43,8 +43,8 @@ from .layer_shift import BandShift, band_shift, stretched
 from .tangle import NewMaterial, new_material
 from .nest import STALL_READ_BELOW_GROWTH_PCT, part_coverage, region_texture
 from .shadows import shade_of_clipped_bed, shadow_left
-from .masks import (around, bounding_box, components, dilate, disk, erode, outline_zone,  # noqa: F401  (re-exported)
-                    reaching_in_from_above, shift_mask, shifted_union, crossing_the_box, mirror_match,
+from .masks import (around, blobs_lying_on, bounding_box, components, dilate, disk, erode,  # noqa: F401  (re-exported)
+                    outline_zone, reaching_in_from_above, shift_mask, shifted_union, crossing_the_box, mirror_match,
                     MIRROR_MATCH_SHARE, PART_IN_PLACE_MAX_MISSING, PART_IN_PLACE_MIN_SEEN)
 
 #: Shadows keep at least this fraction of the bed's brightness; darker than that is material anywhere.
@@ -1253,16 +1253,6 @@ def rods_beyond_the_crop(background: np.ndarray, frame: np.ndarray, expected: np
     rods = crossing_the_box(outside | (~evidence.bed & ~grown), search[band] | (distance <= tol), grown,
                             part_in_place=part_in_place, material=outside)
     return rods[y0 - wy0:y1 - wy0, x0 - wx0:x1 - wx0]
-
-
-def blobs_lying_on(mask: np.ndarray, zone: np.ndarray, share: float) -> np.ndarray:
-    """(h, w) bool: the blobs of ``mask`` with at least ``share`` of their pixels in ``zone``."""
-    count, labels = cv2.connectedComponents(mask.astype(np.uint8), connectivity=8)
-    area = np.bincount(labels.ravel(), minlength=count)
-    inside = np.bincount(labels[zone & mask], minlength=count)
-    lying = inside >= share * np.maximum(area, 1)
-    lying[0] = False
-    return lying[labels]
 
 
 def compare_masks(

@@ -23,14 +23,14 @@ def test_a_single_rise_reading_before_a_zero_span_is_no_stop():
     now = {"s0": view("s0", span=0.0)}
     assert decide(now, {}, s, held_rise_before={"s0": 50.0})[0] == "fail"        # the base's single reading
     # its readings up to check 6 (fine, else span, else coarse): ..., 83 (span), 25 (coarse), 50 (span)
-    assert held_rise(50.0, [163.3, 83.3, 25.0, 50.0]) == 25.0
-    assert decide(now, {}, s, held_rise_before=known({"s0": held_rise(50.0, [25.0, 50.0])}))[0] == "ok"
+    assert held_rise([163.3, 83.3, 25.0, 50.0], True) == 25.0
+    assert decide(now, {}, s, held_rise_before=known({"s0": held_rise([25.0, 50.0], True)}))[0] == "ok"
     # its first reading is no history either, nor a previous check without any reading
-    assert held_rise(50.0, [50.0]) is None and held_rise(None, [83.3, 25.0]) is None
+    assert held_rise([50.0], True) is None and held_rise([83.3, 25.0], False) is None
     # a view that read the part rising at its last two readings, then nothing: a stop (seed 9 040_runout's form);
     # a check without any reading between them does not break the history (seed 13 024_runout's s0L: 100 % at
     # check 11, none at 12-13, 60 % at 14, 33 % at 15, its onset being 14)
-    assert held_rise(60.0, [100.0, 60.0]) == 60.0
+    assert held_rise([100.0, 60.0], True) == 60.0
     pair = {"s0L": view("s0L", span=14.3), "s0R": view("s0R", span=33.3)}
-    held = known({"s0L": held_rise(50.0, [83.3, 50.0]), "s0R": held_rise(66.7, [100.0, 66.7])})
+    held = known({"s0L": held_rise([83.3, 50.0], True), "s0R": held_rise([100.0, 66.7], True)})
     assert decide(pair, {}, s, held_rise_before=held)[0] == "fail"
