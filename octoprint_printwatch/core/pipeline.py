@@ -440,10 +440,18 @@ COARSE_ROSE_BEFORE_PCT = 50.0
 
 
 #: Views that read a stop after a held rise that stall a print with nothing missing yet (decide): one view's reading
-#: jumps by a pixel step, two at the same check do not
+#: jumps by a pixel step, two at the same check do not (every usable view where fewer are usable: stopped_views_needed)
 STOPPED_VIEWS = 2
 #: ... where one of them misses this much of the part (%), or twice as much of its newest band
 STOPPED_MIN_MISSING_PCT = 1.0
+
+
+def stopped_views_needed(usable: int) -> int:
+    """How many views that held a rise and read none now stall a print with a trace missing (decide): STOPPED_VIEWS,
+    or every usable view where fewer are usable. A second view outvotes one view's pixel step; a one-camera rig has
+    none, and there, as on two views, the trace of the newest layers missing tells a stop from a top the camera
+    cannot resolve (that reads 0 with nothing missing)."""
+    return max(1, min(STOPPED_VIEWS, usable))
 
 
 def finest_reading(result: ShapeResult) -> float | None:
@@ -624,7 +632,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       rise of ``COARSE_ROSE_BEFORE_PCT`` needs no missing material to corroborate it (nor does a view's one-check
       reading, while every one-check reading reads a stall and no view the full rise: a stop is a change, while
       strands piled on a stopped part fill its outline); nor do ``STOPPED_VIEWS`` such views that read no rise now
-      (each its finest reading: fine, else over the span, else coarse), where the median of every view's finest
+      (every usable view where fewer are usable: :func:`stopped_views_needed`; each its finest reading: fine, else
+      over the span, else coarse), where the median of every view's finest
       reading reads none either, need more than a trace (``STOPPED_MIN_MISSING_PCT`` of the part, or twice that of
       the newest band, in one of them),
       or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
@@ -777,12 +786,13 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     # (a top a view cannot resolve reads 0-200 % by turns). Each view's reading is its finest (fine, else over the
     # span, else coarse), and their median must read no rise too; a trace of the newest layers must be missing in
     # one of them (STOPPED_MIN_MISSING_PCT): two views misread a black top on a black bed under JPEG's blocks as
-    # still, with nothing missing (the default set's layer_shift_05 at quality 35).
+    # still, with nothing missing (the default set's layer_shift_05 at quality 35). Where one view is usable (a
+    # one-camera rig) it is every view: nothing outvotes it, and the trace stands against its pixel step.
     readings = {cam: reading for cam, r in usable.items()
                 if (reading := finest_reading(r)) is not None and reading >= -15.0}
     stopped_views = [usable[cam] for cam, reading in readings.items() if reading < settings.min_growth_pct
                      and ((held_rise_before or {}).get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT]
-    if (not stalled and not top_closing and len(stopped_views) >= STOPPED_VIEWS
+    if (not stalled and not top_closing and len(stopped_views) >= stopped_views_needed(len(usable))
             and float(np.median(list(readings.values()))) < settings.min_growth_pct
             and any(r.missing_pct >= STOPPED_MIN_MISSING_PCT
                     or (r.band_missing_pct or 0.0) >= 2.0 * STOPPED_MIN_MISSING_PCT for r in stopped_views)):

@@ -182,3 +182,24 @@ def test_two_views_that_read_the_rise_finely_and_stopped_need_little_missing_eit
            "s1": view("s1", growth=0.0, band_missing=0.5, missing=0.4)}
     assert decide(now, {}, s)[0] == "ok"
     assert decide(now, {}, s, held_rise_before={"s0": 83.3, "s1": 83.3})[0] == "fail"
+
+
+def test_the_only_usable_view_that_held_a_rise_and_reads_none_now_stalled_with_a_trace_missing():
+    # a one-camera rig sees a part small: its view read the part rising (coarsely) at its last two checks and not at
+    # all now; the stop came late in the interval, so it misses 0.9 % of the part and 3.2 % of its newest band (under
+    # half the threshold, under the band's 25 %)
+    s = DetectionSettings()
+    now = {"s0": view("s0", coarse=0.0, band_missing=3.2, missing=0.9)}
+    rose = {"s0": 100.0}
+    verdict, reasons = decide(now, {}, s, rise_before=rose, held_rise_before={"s0": 75.0})
+    assert verdict == "fail" and any("has not grown" in why for why in reasons)
+    # the view must have held the rise before (one reading of a rise before a 0 is a pixel step) ...
+    assert decide(now, {}, s, rise_before=rose)[0] == "ok"
+    # ... and a trace must be missing: a top the camera cannot resolve reads 0 now and then with nothing missing
+    blank = {"s0": view("s0", coarse=0.0)}
+    assert decide(blank, {}, s, rise_before=rose, held_rise_before={"s0": 75.0})[0] == "ok"
+    # nor where a top surface closes
+    assert decide(now, {}, s, rise_before=rose, held_rise_before={"s0": 75.0}, top_closing=True)[0] == "ok"
+    # on a rig of two usable views, one such view is still a pixel step of that view while the other reads the rise
+    two = {**now, "s1": view("s1", coarse=100.0)}
+    assert decide(two, {}, s, rise_before={**rose, "s1": 100.0}, held_rise_before={"s0": 75.0, "s1": 75.0})[0] == "ok"
