@@ -753,8 +753,24 @@ def _confirms_new(shift: LayerShift, min_mm: float) -> bool:
 def is_new(shift: LayerShift) -> bool:
     """Whether the previous check tested its own band and its views read this shift clearly not there (under
     SHIFT_WAS_NOT_THERE of the decided pixels it changes there)."""
-    previous = shift.previous
-    return previous is not None and previous.moved_sure > 0 and previous.confirmed_sure < SHIFT_WAS_NOT_THERE
+    return _read_not_there(shift.previous)
+
+
+def _read_not_there(earlier: LayerShift | None) -> bool:
+    return earlier is not None and earlier.moved_sure > 0 and earlier.confirmed_sure < SHIFT_WAS_NOT_THERE
+
+
+def _confirms_grown_in(shift: LayerShift, min_mm: float) -> bool:
+    """Confirmed at this check by SHIFT_CONFIRMED of every pixel it changes, from any number of directions, where the
+    check before the previous one read it clearly not there: the previous check's band is usually the one the shift
+    began in, which shows it only in part (its newest few layers moved, the rest in place), neither clearly not there
+    (:func:`is_new`) nor as clearly as :func:`persists` needs; an offset there all along was there two checks ago too.
+    Only with the overhang on one side that a new shift needs (SHIFT_OVERHANG_SHARE, SHIFT_OPPOSITE_MAX): bed inside
+    the outline alone is also a part a little narrower than the model, and the rest of the readings of the last
+    four checks still rule out an offset there all along (:func:`was_there_before`)."""
+    return (len(shift.before) >= 2 and _read_not_there(shift.before[1]) and _one_sided(shift)
+            and shift.overhang >= SHIFT_OVERHANG_SHARE * shift.support
+            and _confirms(shift, min_mm, SHIFT_CONFIRMED, SHIFT_CONFIRMED))
 
 
 def persists(shift: LayerShift, min_mm: float) -> bool:
@@ -799,13 +815,14 @@ def confirms_layer_shift(shift: LayerShift, min_mm: float) -> bool:
     """Whether the pooled evidence says the newest layers were printed shifted by ``min_mm`` or more:
     at this check alone (SHIFT_CONFIRMED, ..._ONE_VIEW; for a new shift, :func:`is_new`, the same shares of
     the decided pixels, see SHIFT_OVERHANG_SHARE and SHIFT_OPPOSITE_MAX), or new and seen at two checks
-    (:func:`persists`), and not there all along (:func:`was_there_before`, :func:`there_since_first_check`).
+    (:func:`persists`), or grown in over the previous check (:func:`_confirms_grown_in`), and not there all along
+    (:func:`was_there_before`, :func:`there_since_first_check`).
 
     The thresholds are shares of pixels (scale-free); see docs/detection-log.md for what they were
     measured on.
     """
     return ((_confirms(shift, min_mm, SHIFT_CONFIRMED, SHIFT_CONFIRMED_ONE_VIEW) or _confirms_new(shift, min_mm)
-             or persists(shift, min_mm))
+             or persists(shift, min_mm) or _confirms_grown_in(shift, min_mm))
             and not was_there_before(shift) and not there_since_first_check(shift) and not shift.onto_earlier_places)
 
 
@@ -853,6 +870,9 @@ def describe_layer_shift(shift: LayerShift) -> str:
         twice = f", and {shift.previous.confirmed_sure:.0%} at the previous check"
     if not _confirms(shift, 0.0, SHIFT_CONFIRMED, SHIFT_CONFIRMED_ONE_VIEW) and _confirms_new(shift, 0.0):
         share, twice = f"{shift.confirmed_sure:.0%} of the clear evidence, new since the previous check", ""
+    elif not (_confirms(shift, 0.0, SHIFT_CONFIRMED, SHIFT_CONFIRMED_ONE_VIEW) or twice) \
+            and _confirms_grown_in(shift, 0.0):
+        twice = ", new since the check before the previous one"
     return (f"the newest layers sit {shift.magnitude_mm:.1f} mm sideways on the layers below "
             f"(X {dx:+.1f} mm, Y {dy:+.1f} mm), confirmed by {', '.join(sorted(shift.cameras))}"
             f" ({share}{twice}): layer shift?")
