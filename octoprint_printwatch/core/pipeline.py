@@ -26,7 +26,8 @@ from .settings import DetectionSettings
 from .layer_shift import (BandShift, LayerShift, confirms_layer_shift, describe_layer_shift, estimate_layer_shift,
                           onto_earlier_places, with_history)
 from .shape_check import (GROWTH_SPAN_CHECKS, ExpectedRegions, ShapeResult, check_shape,
-                          near_any, not_decisive_where_calibrated)
+                          near_any, not_decisive_where_calibrated,
+                          not_decisive_where_placed_before)
 from .nest import (NEST_MAX_COVERAGE, SOLID_MIN_COVERAGE, STALL_READ_BELOW_GROWTH_PCT, texture_jump_for,
                    textured_views)
 from .tangle import loose_material
@@ -1148,7 +1149,7 @@ class CheckRunner:
                 placed_at=tuple(state.placed_at),
             )
             result = check_shape(**shape_args, candidates=state.shift_candidates, track_candidates=True)
-            result = not_decisive_where_calibrated(result, shape_args)
+            result = not_decisive_where_placed_before(not_decisive_where_calibrated(result, shape_args), shape_args)
             shape_inputs[name] = shape_args
             shape[name] = self._second_look(name, result, shape_args) or result
             if result.usable and result.first_look and result.outline_best_candidate is not None \

@@ -1802,6 +1802,29 @@ def not_decisive_where_calibrated(result: ShapeResult, shape_args: Mapping[str, 
     moved does not come to rest there: the camera still fails, but other cameras must agree. A part
     found whole elsewhere (``moved_px``) or extra material of four times the threshold stays decisive.
     """
+    return _not_decisive_where_it_passes(result, shape_args, [(0, 0)])
+
+
+def not_decisive_where_placed_before(result: ShapeResult, shape_args: Mapping[str, Any]) -> ShapeResult:
+    """``result`` with ``decisive`` cleared when the same check passes where this camera's earlier passing checks
+    laid the outline (``shape_args["placed_at"]``), a countable move from where it lies now, else ``result``.
+
+    A part in a colour close to the bed's, with its cast shadow at the foot, gives the alignment little to hold:
+    the outline can walk off the part (s18 ``044_runout`` s2: 12 px at one check, then the part reads
+    "displaced" as it grows). When the outline laid back where the view found the part before fits it with half
+    the threshold to spare (no newest-band failure, nothing decisive), the part stands where it stood; a part
+    that detached or whose newest layers shifted does not (its top, at least, is elsewhere). As
+    :func:`not_decisive_where_calibrated`: the camera still fails, but other cameras must agree.
+    """
+    return _not_decisive_where_it_passes(result, shape_args, shape_args.get("placed_at", ()))
+
+
+def _not_decisive_where_it_passes(result: ShapeResult, shape_args: Mapping[str, Any],
+                                  anchors: Sequence[tuple[int, int]]) -> ShapeResult:
+    """``result`` with ``decisive`` cleared when the check at one of ``anchors`` (each a countable move, the
+    layer-shift limit and at least two tolerances + 1 px, from ``result.shift_px``) passes with half the threshold
+    to spare, no newest-band failure and nothing decisive. A part found whole elsewhere (``moved_px``) or extra
+    material of four times the threshold stays decisive."""
     threshold = result.threshold
     if not (result.usable and result.decisive and result.moved_px is None and result.extra_pct < 4.0 * threshold):
         return result
@@ -1810,12 +1833,13 @@ def not_decisive_where_calibrated(result: ShapeResult, shape_args: Mapping[str, 
     min_move = 2.0 * tol + 1.0
     if regions.px_per_mm > 0:
         min_move = max(float(shape_args.get("layer_shift_mm", 1.5)) * regions.px_per_mm, min_move)
-    if np.hypot(*result.shift_px) < min_move:
-        return result
-    there = check_shape(**dict(shape_args, anchor=(0, 0), max_drift=0, keep_pictures=False))
-    if (there.usable and not there.decisive and there.error_pct <= threshold / 2.0
-            and (there.band_error_pct is None or there.band_error_pct <= result.band_threshold)):
-        return replace(result, decisive=False)
+    for anchor in dict.fromkeys(tuple(a) for a in anchors):
+        if np.hypot(result.shift_px[0] - anchor[0], result.shift_px[1] - anchor[1]) < min_move:
+            continue
+        there = check_shape(**dict(shape_args, anchor=anchor, max_drift=0, keep_pictures=False))
+        if (there.usable and not there.decisive and there.error_pct <= threshold / 2.0
+                and (there.band_error_pct is None or there.band_error_pct <= result.band_threshold)):
+            return replace(result, decisive=False)
     return result
 
 

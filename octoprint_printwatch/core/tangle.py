@@ -87,6 +87,9 @@ ARC_SECTORS = 8
 SECTOR_MIN_MM2 = 1.0
 #: New material spanning more than this arc around the part surrounds it (see :func:`loose_material`).
 SURROUNDS_ARC_DEG = 180.0
+#: A surrounding view is corroborated when another view that measured new material sees at least this much of it
+#: (mm^2, the bed-marks zone's blobs included): a sector's worth, a strand's root (see :func:`loose_material`).
+SURROUNDING_WITNESS_MM2 = SECTOR_MIN_MM2
 
 
 def arc_around(material: np.ndarray, expected: np.ndarray, scale_mm2: float) -> float:
@@ -233,6 +236,13 @@ def viewpoints(directions: Mapping[str, float | None]) -> int:
     return count_viewpoints(known, period=2.0 * np.pi) + int(len(known) < len(directions))
 
 
+def witnessed_by_another(camera: str, with_foot: Mapping[str, float | None]) -> bool:
+    """Another view that measured new material (mm^2, the bed-marks zone's blobs included) sees at least
+    ``SURROUNDING_WITNESS_MM2`` of it, or no other view measured any (a one-camera rig, a first check)."""
+    others = [a for cam, a in with_foot.items() if cam != camera and a is not None]
+    return not others or max(others) >= SURROUNDING_WITNESS_MM2
+
+
 def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = TWO_VIEWS_MM2,
                    one_view_mm2: float = ONE_VIEW_MM2, with_foot: Mapping[str, float | None] | None = None,
                    directions: Mapping[str, float | None] | None = None,
@@ -265,7 +275,10 @@ def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = 
     (:attr:`NewMaterial.surrounds_part`). Such a view, seeing ``one_view_mm2`` (the zone's blobs included),
     counts as two sides: loops drape down every side of the
     part and spread over the bed around its foot, while what one view reads on a normal print lies on one side
-    of it (its cast shadow, a glare line on a glossy bed, its own side beyond a misplaced outline).
+    of it (its cast shadow, a glare line on a glossy bed, its own side beyond a misplaced outline). Loops on
+    every side are on the sides the other views see too, so where another view measured new material it must
+    see some (:func:`witnessed_by_another`): a skirt or brim line drawn into one view's mask at one check (its
+    contrast near that view's threshold) also lies all around the part, and is that view's alone.
     """
     seen = {cam: a for cam, a in areas.items() if a is not None and a >= two_views_mm2}
     slowed = ""
@@ -274,7 +287,8 @@ def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = 
         if not seen:
             return None
         # (as much as a lone camera must see: a brim of the part's colour, new in one view, also lies around it)
-        around = sorted(cam for cam, a in seen.items() if cam in surrounding and a >= one_view_mm2)
+        around = sorted(cam for cam, a in seen.items() if cam in surrounding and a >= one_view_mm2
+                        and witnessed_by_another(cam, {**areas, **(with_foot or {})}))
         if around:
             slowed = f" on more than half the circle around the part in {', '.join(around)}"
         elif viewpoints({cam: (directions or {}).get(cam) for cam in seen}) < 2:

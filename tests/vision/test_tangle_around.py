@@ -10,7 +10,8 @@ import numpy as np
 
 from octoprint_printwatch.core.pipeline import decide
 from octoprint_printwatch.core.settings import DetectionSettings
-from octoprint_printwatch.core.tangle import ONE_VIEW_MM2, TWO_VIEWS_MM2, NewMaterial, arc_around, loose_material
+from octoprint_printwatch.core.tangle import (ONE_VIEW_MM2, SURROUNDING_WITNESS_MM2, TWO_VIEWS_MM2, NewMaterial,
+                                             arc_around, loose_material, witnessed_by_another)
 
 from .synthetic import PART, Box, H, W
 from .test_tangle import PX_PER_MM, measure
@@ -54,7 +55,7 @@ def test_strands_at_the_foot_on_every_side_surround_the_part_a_shadow_on_one_sid
 
 
 def test_one_view_of_loose_material_around_the_part_pauses_while_it_rises():
-    foot = {"a": 8 * TWO_VIEWS_MM2, "b": 0.0}
+    foot = {"a": 8 * TWO_VIEWS_MM2, "b": 2.0 * SURROUNDING_WITNESS_MM2}   # b sees a few of the loops
     pair = {"a": 0.0, "b": np.radians(8.0)}           # a stereo pair: one side
     assert loose_material({"a": 0.0, "b": 0.0}, with_foot=foot, directions=pair, rise_pct=70.0) is None
     reason = loose_material({"a": 0.0, "b": 0.0}, with_foot=foot, directions=pair, rise_pct=70.0, surrounding={"a"})
@@ -78,3 +79,38 @@ def test_decide_pauses_on_one_view_whose_new_material_surrounds_the_part():
     verdict, reasons = decide(views, {}, s)
     assert verdict == "fail" and any("around the part in s0R" in r for r in reasons)
     assert isinstance(views["s0R"].new_outside, NewMaterial)
+
+
+def test_a_view_surrounded_alone_while_the_others_see_nothing_new_is_no_tangle():
+    # seed-18-like figures: a skirt (or brim) line drawn into one view's mask at one check lies all around the
+    # part, 35-116 mm² at the foot over 225°, while the other views measured no new material at all
+    pair = {"a": 0.0, "b": np.radians(8.0)}
+    alone = {"a": 4 * ONE_VIEW_MM2, "b": 0.0}
+    assert not witnessed_by_another("a", alone)
+    assert loose_material({"a": 0.0, "b": 0.0}, with_foot=alone, directions=pair, rise_pct=100.0,
+                          surrounding={"a"}) is None
+    # another view seeing a strand's root of it corroborates: loops on every side are seen from other sides too
+    seen = {"a": 4 * ONE_VIEW_MM2, "b": SURROUNDING_WITNESS_MM2}
+    assert loose_material({"a": 0.0, "b": 0.0}, with_foot=seen, directions=pair, rise_pct=100.0,
+                          surrounding={"a"}) is not None
+    # two surrounding views corroborate each other
+    assert loose_material({"a": 0.0, "b": 0.0}, with_foot={"a": 66.0, "b": 60.0}, directions=pair,
+                          rise_pct=100.0, surrounding={"a", "b"}) is not None
+    # no other view measured new material (a one-camera rig, or the others' first look): nothing to ask
+    assert witnessed_by_another("a", {"a": 80.0, "b": None})
+    assert loose_material({"a": 0.0, "b": None}, with_foot={"a": 80.0}, directions=pair, rise_pct=100.0,
+                          surrounding={"a"}) is not None
+    # the other view's silence does not hide a slowed part: one view of strands still pauses a part that stopped
+    assert loose_material({"a": 0.0, "b": 0.0}, with_foot=alone, directions=pair, rise_pct=20.0,
+                          surrounding={"a"}) is not None
+
+
+def test_decide_ignores_one_view_surrounded_alone_while_the_part_rises():
+    s = DetectionSettings()
+    views = {"s0": figures("s0", 100.0, at_foot_mm2=35.0), "s1": figures("s1", 88.0)}
+    views["s0"] = replace(views["s0"], new_outside=replace(views["s0"].new_outside, direction=0.0, arc_deg=225.0))
+    views["s1"] = replace(views["s1"], new_outside=replace(views["s1"].new_outside, direction=np.pi / 2))
+    assert decide(views, {}, s)[0] == "ok"
+    views["s1"] = replace(views["s1"], new_outside=replace(views["s1"].new_outside, at_foot_mm2=2.0))  # a strand's root
+    verdict, reasons = decide(views, {}, s)
+    assert verdict == "fail" and any("around the part in s0" in r for r in reasons)
