@@ -44,7 +44,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from octoprint_printwatch.core.pipeline import CheckRunner, decide, prepare_job  # noqa: E402
+from octoprint_printwatch.core.pipeline import CheckRunner, prepare_job  # noqa: E402
+from octoprint_printwatch.core.verdict import decide  # noqa: E402
 from octoprint_printwatch.core.recording import load_recording  # noqa: E402
 from octoprint_printwatch.core.seed_rules import SEED_THRESHOLD_PCT, seed_check, seed_error  # noqa: E402
 from octoprint_printwatch.core.settings import DetectionSettings  # noqa: E402

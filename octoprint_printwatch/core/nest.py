@@ -29,7 +29,7 @@ NEST_MAX_COVERAGE = 0.5
 SOLID_MIN_COVERAGE = 0.8
 
 #: A view that saw the part rise at least this much (% of the expected rise) is not stalled: its band's
-#: coverage is not read there (pipeline.decide's stall rules all need less), so it need not be measured
+#: coverage is not read there (verdict.decide's stall rules all need less), so it need not be measured
 STALL_READ_BELOW_GROWTH_PCT = 50.0
 
 #: A view whose newest band looks at least this many times as textured (mean luma gradient) as its band at its

@@ -179,12 +179,12 @@ class ShapeResult:
     #: the growth test where the expected rise is too small for ``growth_pct`` (a median under 1.5 ``min_rise``,
     #: 6 px at 640x480: a part seen small, a short check interval): the same figure with a median rise of
     #: ``min_rise`` (4 px) allowed, read to the pixel, so about +-25 %; None where ``growth_pct`` is measured.
-    #: pipeline.decide's stall rules fall back on it only when no camera measured ``growth_pct``
+    #: verdict.decide's stall rules fall back on it only when no camera measured ``growth_pct``
     coarse_growth_pct: float | None = None
     #: the growth test over more than one check, where one check's rise is too small for ``growth_pct`` and
     #: ``coarse_growth_pct`` (2-3 px: a part seen small, checks a few layers apart): the rise since an older look
     #: of this camera (check_shape's ``older_looks``), read as finely as ``growth_pct``; None where either of those
-    #: is measured. pipeline.decide's stall rules read it where ``growth_pct`` is None (a stall persists; a span
+    #: is measured. verdict.decide's stall rules read it where ``growth_pct`` is None (a stall persists; a span
     #: reaching back before the stop reads part of the rise, so it reads the stall later)
     span_growth_pct: float | None = None
     #: how many checks back the growth reading was measured against: 1 the previous check (``growth_pct``,
@@ -277,7 +277,7 @@ LIGHT_CELL_MIN_PIXELS = 12
 #: ... and the relit background is kept only where no more than this share of the bed still looks changed: a
 #: reflection relit leaves a few % (median 3 % on eight cross-check seeds); a camera knocked by a strip's width over a
 #: bed of tape strips 20-80 px wide leaves 42-100 %. (Knocked by half a broad strip it can leave 8 %: such a view is
-#: relit, and a relit view never pauses a print alone, pipeline.decide.)
+#: relit, and a relit view never pauses a print alone, verdict.decide.)
 RELIT_MAX_CHANGED = 0.10
 
 
@@ -1698,7 +1698,7 @@ def check_shape(
             moved_px = None
 
     # Spaghetti (core/tangle.py): material seen now and not at the previous check, where the model has no
-    # part, attached to it; pipeline.decide weighs it over the cameras
+    # part, attached to it; verdict.decide weighs it over the cameras
     new_outside = None
     if seen_before is not None:
         new_outside = new_material(observed, seen_before, expected_a, search_a, tol, regions.px_per_mm,
@@ -1749,7 +1749,7 @@ def check_shape(
 
     # Of what is missing, how much shows the background itself: a face of nearly the background's colour
     # (filament in the bed's colour, a top face lit like the bed) passes for it pixel by pixel, but is off
-    # by the same amount in all its pixels. pipeline.decide weighs a failure on missing material alone by
+    # by the same amount in all its pixels. verdict.decide weighs a failure on missing material alone by
     # this figure, so it is measured only for one (a few ms, on about one camera-check in ten).
     background_missing_pct = background_band_missing_pct = None
     if usable and not passed and missing_pct > 0 and extra_pct * 2.0 <= missing_pct:

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from octoprint_printwatch.core.camera import Camera
-from octoprint_printwatch.core.pipeline import decide
+from octoprint_printwatch.core.verdict import decide
 from octoprint_printwatch.core.settings import DetectionSettings
 from octoprint_printwatch.core.stereo.size_check import (PairSizeCheck, SizeSettings, expected_width,
                                                           width_direction)

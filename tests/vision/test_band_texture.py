@@ -1,5 +1,5 @@
 """Strands piled over a part that slowed: the newest band turns textured (core/nest.py ``region_texture``,
-``textured_views``; the textured-band rule in pipeline.decide). Cross-check seed 10 ``054_spaghetti``: strands in
+``textured_views``; the textured-band rule in verdict.decide). Cross-check seed 10 ``054_spaghetti``: strands in
 the part's own colour fill the band (nothing missing, band coverage 0.83), the outline rises 46 %, and the band's
 mean gradient reads 1.6x what it read at the previous check."""
 from __future__ import annotations
@@ -9,7 +9,7 @@ import numpy as np
 
 from octoprint_printwatch.core.nest import (NEST_MAX_COVERAGE, SMOOTH_TEXTURE, TEXTURE_JUMP, region_texture,
                                             textured_views)
-from octoprint_printwatch.core.pipeline import decide
+from octoprint_printwatch.core.verdict import decide
 from octoprint_printwatch.core.settings import DetectionSettings
 from octoprint_printwatch.core.shape_check import ShapeResult, check_shape
 

@@ -8,7 +8,7 @@ with its top really gone, the bed showing through.
 import numpy as np
 import pytest
 
-from octoprint_printwatch.core.pipeline import decide
+from octoprint_printwatch.core.verdict import decide
 from octoprint_printwatch.core.settings import DetectionSettings
 from octoprint_printwatch.core.shape_check import ShapeResult, check_shape, differs_as_a_group, material_evidence
 

@@ -1,5 +1,5 @@
 """The stall rule for a part that slowed (spaghetti piling on a stopped part): known-answer figures."""
-from octoprint_printwatch.core.pipeline import decide
+from octoprint_printwatch.core.verdict import decide
 from octoprint_printwatch.core.settings import DetectionSettings
 from octoprint_printwatch.core.shape_check import ShapeResult
 

@@ -1,7 +1,7 @@
 """The coarse growth reading: a part whose rise per check is 4-6 px (seen small, checks a few layers apart)."""
 import numpy as np
 
-from octoprint_printwatch.core.pipeline import decide
+from octoprint_printwatch.core.verdict import decide
 from octoprint_printwatch.core.settings import DetectionSettings
 from octoprint_printwatch.core.shape_check import COARSE_RISE_FACTOR, ShapeResult, profile_growth
 
@@ -66,7 +66,7 @@ def test_a_stop_between_two_checks_is_read_against_the_last_check_that_rose():
     (the stop) with nothing missing yet (the newest layers too thin), and at check 14 no rise again with 3.9 %
     of the part missing. At check 14 the previous reading is the stop itself (0 %), so the coarse rule of
     HEAD, which needs a rise at the previous check, never looked again."""
-    from octoprint_printwatch.core.pipeline import missing_since_rise
+    from octoprint_printwatch.core.verdict import missing_since_rise
     s = DetectionSettings()
     # the state a view keeps: its missing material at the check that rose, while it reads a stall since
     kept, quiet = missing_since_rise(None, 100.0, 0.0, s.min_growth_pct)    # check 12: rose, 0 % missing
@@ -102,7 +102,7 @@ def test_a_view_keeps_its_rise_through_checks_where_the_model_gives_it_nothing_t
     all (0 columns) and a runout and a normal print look the same. At check 8 s1 reads no rise with 6.7 %
     missing. HEAD forgot the rise at the first check without a reading, and s1's missing material (one camera of
     two) never counted: the print was never paused."""
-    from octoprint_printwatch.core.pipeline import missing_since_rise
+    from octoprint_printwatch.core.verdict import missing_since_rise
     s = DetectionSettings()
     state = missing_since_rise(None, 60.0, 0.0, s.min_growth_pct)                       # check 4
     for rise, missing in ((0.0, 3.27), (None, 3.30), (None, 4.71)):                     # checks 5-7
@@ -121,7 +121,7 @@ def test_a_view_that_reads_no_rise_while_nothing_goes_missing_forgets_its_rise()
     every check with nothing missing (the view cannot see this part's top rise), then none at checks 11-13 (a
     tier inside the silhouette), then 0 % with a passing 19.9 % missing at check 15. A stop late in an interval
     may show nothing missing at the first check after it, never at the second: the rise is forgotten there."""
-    from octoprint_printwatch.core.pipeline import RISE_QUIET_CHECKS, missing_since_rise
+    from octoprint_printwatch.core.verdict import RISE_QUIET_CHECKS, missing_since_rise
     s = DetectionSettings()
     state = missing_since_rise(None, 100.0, 0.0, s.min_growth_pct)                      # check 4
     state = missing_since_rise(*state[:1], 0.0, 0.0, s.min_growth_pct, state[1], 7.0)   # check 5: quiet, kept

@@ -4,7 +4,8 @@ from dataclasses import replace
 
 import pytest
 
-from octoprint_printwatch.core.pipeline import CameraState, decide
+from octoprint_printwatch.core.pipeline import CameraState
+from octoprint_printwatch.core.verdict import decide
 from octoprint_printwatch.core.settings import DetectionSettings
 from octoprint_printwatch.core.shape_check import GROWTH_SPAN_CHECKS, ShapeResult, check_shape
 

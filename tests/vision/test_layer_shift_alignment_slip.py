@@ -8,7 +8,7 @@ paused both prints before their onset as a layer shift along the line of sight."
 import numpy as np
 
 from octoprint_printwatch.core.layer_shift import band_shift, confirms_layer_shift
-from octoprint_printwatch.core.pipeline import layer_shift_of
+from octoprint_printwatch.core.verdict import layer_shift_of
 
 from .frustum_scene import BAND, BEFORE, HEIGHT, J, MIN_DX, frustum
 

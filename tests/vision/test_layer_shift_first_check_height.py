@@ -6,7 +6,7 @@ scored 788 against the shift's 549, while the first check read that height at -6
 of a top in the bed's colour is read in place and lower later (cross-check seed 10 `054_spaghetti`), so a shorter part
 still needs two readings."""
 from octoprint_printwatch.core.layer_shift import confirms_layer_shift
-from octoprint_printwatch.core.pipeline import layer_shift_of
+from octoprint_printwatch.core.verdict import layer_shift_of
 
 from .frustum_scene import BEFORE, frustum
 from .test_layer_shift_height_history import IN_PLACE, LOWER, SHIFTED, view

@@ -3,7 +3,7 @@ moves the newest layers only, the layers below stay in place and are seen. A fac
 "bed where the band should be" for any move of the band (cross-check seed 14 `042`: 61 % of the part missing in the
 one view that "confirmed" an 8.8-mm shift, 448 confirming px, none of them material)."""
 from octoprint_printwatch.core.layer_shift import band_shift
-from octoprint_printwatch.core.pipeline import SHIFT_VIEW_MAX_MISSING_PCT, band_shifts_of, decide
+from octoprint_printwatch.core.verdict import SHIFT_VIEW_MAX_MISSING_PCT, band_shifts_of, decide
 from octoprint_printwatch.core.settings import DetectionSettings
 from octoprint_printwatch.core.shape_check import ShapeResult
 

@@ -5,7 +5,7 @@ brim; later checks, not yet frozen, move it up to 2 px a check towards the calib
 The newest layers, printed on the part, stay where the first look saw it: against the walked outline they read as a
 band moved by (-6, -4) px, 4.3 mm, from one direction, and paused the normal print twice."""
 from octoprint_printwatch.core.layer_shift import band_shift, confirms_layer_shift, onto_earlier_places
-from octoprint_printwatch.core.pipeline import layer_shift_of
+from octoprint_printwatch.core.verdict import layer_shift_of
 
 from .frustum_scene import BAND, BEFORE, HEIGHT, J, MIN_DX, frustum
 

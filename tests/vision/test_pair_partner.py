@@ -9,7 +9,8 @@ cylinder on black PEI seen by a pair, with a stringing hair at layer 40 and the 
 from dataclasses import replace
 from pathlib import Path
 
-from octoprint_printwatch.core.pipeline import decide, evaluate_recording
+from octoprint_printwatch.core.pipeline import evaluate_recording
+from octoprint_printwatch.core.verdict import decide
 from octoprint_printwatch.core.recording import load_recording
 from octoprint_printwatch.core.settings import DetectionSettings
 

@@ -12,7 +12,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from octoprint_printwatch.core.pipeline import CheckRunner, band_shifts_of, decide
+from octoprint_printwatch.core.pipeline import CheckRunner
+from octoprint_printwatch.core.verdict import band_shifts_of, decide
 from octoprint_printwatch.core.settings import DetectionSettings
 from octoprint_printwatch.core.shape_check import ShapeResult, bed_light_change, check_shape
 from octoprint_printwatch.core.tangle import NewMaterial

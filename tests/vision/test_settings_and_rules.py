@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from octoprint_printwatch.core.pipeline import decide
+from octoprint_printwatch.core.verdict import decide
 from octoprint_printwatch.core.seed_rules import seed_error
 from octoprint_printwatch.core.settings import DetectionSettings, SettingsError, parse_camera_threshold
 from octoprint_printwatch.core.shape_check import ShapeResult

@@ -9,7 +9,7 @@ ninth session): known-answer figures through ``decide`` and ``loose_material``.
 """
 from dataclasses import replace
 
-from octoprint_printwatch.core.pipeline import decide
+from octoprint_printwatch.core.verdict import decide
 from octoprint_printwatch.core.settings import DetectionSettings
 from octoprint_printwatch.core.shape_check import ShapeResult
 from octoprint_printwatch.core.tangle import ONE_VIEW_MM2, SLOWED_RISE_PCT, TWO_VIEWS_MM2, NewMaterial, loose_material

@@ -1,5 +1,5 @@
 """A part that stopped under a nest of strands (spaghetti): its newest band is a mesh over the bed, not a
-solid face (core/nest.py, the stall rule in pipeline.decide). Known-answer images, the rule's figures, and
+solid face (core/nest.py, the stall rule in verdict.decide). Known-answer images, the rule's figures, and
 one spaghetti print rendered by the independent cross-check simulator."""
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import cv2
 import numpy as np
 
 from octoprint_printwatch.core.nest import NEST_MAX_COVERAGE, SOLID_MIN_COVERAGE, part_coverage
-from octoprint_printwatch.core.pipeline import decide
+from octoprint_printwatch.core.verdict import decide
 from octoprint_printwatch.core.settings import DetectionSettings
 from octoprint_printwatch.core.shape_check import ShapeResult, check_shape
 

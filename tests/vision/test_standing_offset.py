@@ -1,9 +1,9 @@
 """Missing material a view already read while it saw the part rise is a standing offset, not a runout: decide
-lets it wait unless more of the part, or of its newest band, is missing now (pipeline.standing_offset; CheckRunner
-keeps each view's lowest readings at its rising checks: pipeline.lowest_missing_while_rising)."""
+lets it wait unless more of the part, or of its newest band, is missing now (verdict.standing_offset; CheckRunner
+keeps each view's lowest readings at its rising checks: verdict.lowest_missing_while_rising)."""
 from functools import reduce
 
-from octoprint_printwatch.core.pipeline import decide, lowest_missing_while_rising
+from octoprint_printwatch.core.verdict import decide, lowest_missing_while_rising
 from octoprint_printwatch.core.settings import DetectionSettings
 from octoprint_printwatch.core.shape_check import ShapeResult
 

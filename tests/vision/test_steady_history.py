@@ -1,6 +1,6 @@
 """One reading is no history: the span stall rule's "it rose at its previous check" needs the view's reading before
-that to read a rise too (pipeline.held_rise; CheckRunner passes decide only such views, as ``held_rise_before``)."""
-from octoprint_printwatch.core.pipeline import decide, held_rise
+that to read a rise too (verdict.held_rise; CheckRunner passes decide only such views, as ``held_rise_before``)."""
+from octoprint_printwatch.core.verdict import decide, held_rise
 from octoprint_printwatch.core.settings import DetectionSettings
 from octoprint_printwatch.core.shape_check import ShapeResult
 

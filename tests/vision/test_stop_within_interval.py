@@ -1,6 +1,6 @@
 """A stop is a change: the check after it reads part of the interval's rise (or the part slowing over a span),
 while the gap is still too shallow to read as missing material."""
-from octoprint_printwatch.core.pipeline import decide, missing_since_rise
+from octoprint_printwatch.core.verdict import decide, missing_since_rise
 from octoprint_printwatch.core.settings import DetectionSettings
 from octoprint_printwatch.core.shape_check import ShapeResult
 

@@ -11,7 +11,7 @@ import cv2
 import numpy as np
 import pytest
 
-from octoprint_printwatch.core.pipeline import decide
+from octoprint_printwatch.core.verdict import decide
 from octoprint_printwatch.core.settings import DetectionSettings
 from octoprint_printwatch.core.shape_check import check_shape
 from octoprint_printwatch.core.tangle import (ONE_VIEW_MM2, TWO_VIEWS_MM2, NewMaterial, loose_material, new_material,

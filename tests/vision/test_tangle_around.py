@@ -8,7 +8,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from octoprint_printwatch.core.pipeline import decide
+from octoprint_printwatch.core.verdict import decide
 from octoprint_printwatch.core.settings import DetectionSettings
 from octoprint_printwatch.core.tangle import (ONE_VIEW_MM2, SURROUNDING_WITNESS_MM2, TWO_VIEWS_MM2, NewMaterial,
                                              arc_around, loose_material, witnessed_by_another)

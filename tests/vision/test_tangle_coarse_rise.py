@@ -1,4 +1,4 @@
-"""One view of new material while a part seen small rose under half, read coarsely (pipeline.rise_for_loose_material).
+"""One view of new material while a part seen small rose under half, read coarsely (verdict.rise_for_loose_material).
 
 Cross-check seed 8 ``053_detach``: a 9.8-mm box (about 20 px wide at 640x480) is knocked 27 mm away; the nozzle
 keeps extruding where it stood, and that pile covers the small outline's core, so nothing reads missing at the
@@ -8,7 +8,7 @@ rule needs a rise reading as its second witness; the coarse readings now stand i
 """
 from dataclasses import replace
 
-from octoprint_printwatch.core.pipeline import decide
+from octoprint_printwatch.core.verdict import decide
 from octoprint_printwatch.core.settings import DetectionSettings
 from octoprint_printwatch.core.shape_check import ShapeResult
 from octoprint_printwatch.core.tangle import NewMaterial
@@ -36,7 +36,7 @@ def test_coarse_readings_stand_in_for_the_rise_when_no_view_reads_it_finely():
 
 
 def test_fine_readings_come_first_and_mix_with_coarse_ones_where_too_few():
-    from octoprint_printwatch.core.pipeline import rise_for_loose_material
+    from octoprint_printwatch.core.verdict import rise_for_loose_material
     two_fine = {"a": view("a", None, growth=100.0), "b": view("b", None, growth=90.0), "c": view("c", 0.0)}
     assert rise_for_loose_material(two_fine, [100.0, 90.0]) == 95.0          # as before: the fine median
     one_fine = {"a": view("a", None, growth=100.0), "b": view("b", 50.0), "c": view("c", 20.0)}

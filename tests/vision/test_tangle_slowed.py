@@ -10,7 +10,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from octoprint_printwatch.core.pipeline import decide
+from octoprint_printwatch.core.verdict import decide
 from octoprint_printwatch.core.settings import DetectionSettings
 from octoprint_printwatch.core.shape_check import check_shape
 from octoprint_printwatch.core.tangle import ONE_VIEW_MM2, SLOWED_RISE_PCT, TWO_VIEWS_MM2, NewMaterial, loose_material

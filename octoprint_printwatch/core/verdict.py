@@ -1,0 +1,543 @@
+"""The combined decision rule: :func:`decide` turns one check's shape results (per camera), size results (per
+stereo pair) and each view's history into one verdict with its reasons, the one place a pause is decided; and
+the small rules it weighs (a view's rise held, missing material kept since a rise, a standing offset, the
+layer-shift evidence of the usable views)."""
+from __future__ import annotations
+
+import math
+from typing import Collection, Mapping, Sequence
+
+import numpy as np
+
+from .settings import DetectionSettings
+from .layer_shift import (BandShift, LayerShift, confirms_layer_shift, describe_layer_shift, estimate_layer_shift,
+                          with_history)
+from .shape_check import ShapeResult
+from .nest import NEST_MAX_COVERAGE, SOLID_MIN_COVERAGE, texture_jump_for, textured_views
+from .tangle import loose_material
+
+
+#: A view reading more than this share (%) of the whole part missing gives no layer-shift evidence: a shift moves the
+#: newest layers only, and the layers below stay where they belong, seen. A view that misses most of the part (a face
+#: in the bed's colour read as bed) reads "bed where the band should be" for any move of the band.
+SHIFT_VIEW_MAX_MISSING_PCT = 50.0
+
+
+def band_shifts_of(shape: Mapping[str, ShapeResult]) -> dict[str, BandShift]:
+    """{camera: BandShift}: the layer-shift evidence of the usable cameras that tested their newest band and see
+    most of the part (SHIFT_VIEW_MAX_MISSING_PCT), not read against a relit background (ShapeResult.relit: lit bed
+    read as the part offsets a band)."""
+    return {cam: r.band_shift for cam, r in shape.items()
+            if r.usable and not r.relit and r.band_shift is not None and r.missing_pct <= SHIFT_VIEW_MAX_MISSING_PCT}
+
+
+def layer_shift_of(shape: Mapping[str, ShapeResult],
+                   history: Sequence[tuple[bool, Mapping[str, BandShift]]] = (),
+                   band_shifts: Mapping[str, BandShift] | None = None) -> LayerShift | None:
+    """The bed shift of the newest layers that the usable cameras confirm together (or None).
+
+    ``history``: (had a check before it, band_shifts_of) of the previous checks, oldest first: the evidence
+    for the same shift at those checks (``core.layer_shift.with_history``). ``band_shifts``: this check's
+    ``band_shifts_of(shape)`` when the caller has it already.
+    """
+    recent = list(history)[-4:]
+    earlier = [views for tested, views in recent if tested and views]
+    # (the print's first check, while among them: its band is the whole part, its top the part's height)
+    first = next((views for tested, views in recent if not tested and views), None)
+    return with_history(estimate_layer_shift(band_shifts_of(shape) if band_shifts is None else band_shifts,
+                                             earlier=earlier, first=first), history)
+
+
+def unseen_by_partner(result: ShapeResult, usable: Mapping[str, ShapeResult], pairs: Sequence[Sequence[str]],
+                      extra_before: float | None) -> bool:
+    """True when ``result`` fails on extra material alone (not decisive, less than a third of the threshold
+    missing, no newest-band failure) that appeared at once (under a third of the threshold at the camera's
+    previous check, ``extra_before``; never when it had none) while the other camera of one of its
+    stereo ``pairs`` ([left, right] names) is ``usable``, passes and sees no extra material at all (every
+    usable partner, where a camera belongs to several pairs)."""
+    if (result.passed or result.decisive or result.missing_pct >= result.threshold / 3.0
+            or (result.band_error_pct is not None and result.band_error_pct > result.band_threshold)
+            or extra_before is None or extra_before >= result.threshold / 3.0):
+        return False
+    names = [b if a == result.camera else a for a, b in pairs if result.camera in (a, b)]
+    partners = [usable[name] for name in names if name in usable]
+    return bool(partners) and all(p.passed and p.extra_pct == 0.0 for p in partners)
+
+
+#: A coarse growth reading counts in decide only from a view that read the part rising this much (%) at its
+#: previous check (fine or coarse reading)
+COARSE_ROSE_BEFORE_PCT = 50.0
+
+
+#: Views that read a stop after a held rise that stall a print with nothing missing yet (decide): one view's reading
+#: jumps by a pixel step, two at the same check do not (every usable view where fewer are usable: stopped_views_needed)
+STOPPED_VIEWS = 2
+#: ... where one of them misses this much of the part (%), or twice as much of its newest band
+STOPPED_MIN_MISSING_PCT = 1.0
+
+
+def stopped_views_needed(usable: int) -> int:
+    """How many views that held a rise and read none now stall a print with a trace missing (decide): STOPPED_VIEWS,
+    or every usable view where fewer are usable. A second view outvotes one view's pixel step; a one-camera rig has
+    none, and there, as on two views, the trace of the newest layers missing tells a stop from a top the camera
+    cannot resolve (that reads 0 with nothing missing)."""
+    return max(1, min(STOPPED_VIEWS, usable))
+
+
+def finest_reading(result: ShapeResult) -> float | None:
+    """A view's finest reading of the rise (% of the expected): fine, else over the span, else coarse; None: none."""
+    return next((x for x in (result.growth_pct, result.span_growth_pct, result.coarse_growth_pct) if x is not None),
+                None)
+
+
+#: A view's reading of a rise at its previous check corroborates a stop (decide's ``held_rise_before``) only
+#: when its last this many readings of the rise read one: where the camera cannot resolve the top, its readings
+#: jump by a pixel step from one check to the next (0-200 %), so one reading of a rise before a 0 is no history
+#: of rising.
+RISE_HELD_READINGS = 2
+
+
+#: A view reading at least this share of the expected rise (fine, over its span or coarse) saw the part rise as the
+#: model says: a stop that no view shows as missing material does not stand against it (decide).
+FULL_RISE_PCT = 100.0
+
+
+def rise_read(r: ShapeResult) -> float:
+    """A view's highest reading of the rise at this check (% of the expected): fine, over its span or coarse;
+    0 (none)."""
+    readings = [x for x in (r.growth_pct, r.span_growth_pct, r.coarse_growth_pct) if x is not None]
+    return float(max(readings, default=0.0))
+
+
+def held_rise(readings: Sequence[float], read_at_previous: bool) -> float | None:
+    """The rise (% of the expected) a view read at its previous check where its readings before held it: the lowest
+    of its last :data:`RISE_HELD_READINGS` readings (``readings``: its finest, fine, else over the span, else coarse,
+    at its checks that gave one since it was last unusable, oldest first), or None where the previous check gave no
+    reading (``read_at_previous`` False) or too few readings were given."""
+    if not read_at_previous or len(readings) < RISE_HELD_READINGS:
+        return None
+    return float(min(readings[-RISE_HELD_READINGS:]))
+
+
+#: A view keeps its missing material from its last rising check (missing_since_rise) for at most this many
+#: checks since at which nothing went missing (under a quarter of its threshold more than at the rise): a stop
+#: late in an interval may show nothing at the first check after it, never at the second (a whole interval's
+#: layers are then gone); a view that reads "no rise" while nothing goes missing cannot see the part rise.
+RISE_QUIET_CHECKS = 2
+
+
+def missing_since_rise(kept: float | None, rise: float | None, missing: float,
+                       min_growth_pct: float, quiet: int = 0,
+                       threshold: float | None = None,
+                       rise_before: float | None = None) -> tuple[float | None, int]:
+    """A view's ``CameraState.rise_missing`` and ``rise_quiet`` after a check: its missing material
+    (``missing``, %) when it read the part rising there (``rise``: fine or else coarse growth, % of the expected
+    rise, at least :data:`COARSE_ROSE_BEFORE_PCT`); the value ``kept`` from an earlier such check while it
+    reads a stall (-15 % to ``min_growth_pct``: 0 +- a pixel step) or no reading at all (the model's outline
+    does not rise in this view there, e.g. a tier printed inside the silhouette of the one below: no evidence
+    either way), counting the checks since (``quiet``) at which it misses under a quarter of ``threshold``
+    more than ``kept`` (None: none counted), and forgotten at the :data:`RISE_QUIET_CHECKS`-th; None after any
+    other reading, except a part of the rise (``min_growth_pct`` to :data:`COARSE_ROSE_BEFORE_PCT`) read right
+    after the rising check itself (``rise_before``: the view's reading at its previous check): the check after a
+    stop reads the layers printed before it in that interval, the checks after it none."""
+    if rise is not None and rise >= COARSE_ROSE_BEFORE_PCT:
+        return missing, 0
+    stop_within_interval = (rise is not None and min_growth_pct <= rise
+                            and (rise_before or 0.0) >= COARSE_ROSE_BEFORE_PCT)
+    if kept is None or (rise is not None and not -15.0 <= rise < min_growth_pct and not stop_within_interval):
+        return None, 0
+    if threshold is not None and missing - kept < threshold / 4.0:
+        quiet += 1
+        if quiet >= RISE_QUIET_CHECKS:
+            return None, 0
+    return kept, quiet
+
+
+#: A view's newest band counts as gone since it read the part rising (standing_offset) once this many points more
+#: of it are missing than then (the stall rule's share of the band gone).
+BAND_GONE_SINCE_RISE_PCT = 25.0
+
+
+def lowest_missing_while_rising(kept: tuple[float, float | None] | None, rise: float | None, missing: float,
+                                band_missing: float | None) -> tuple[float, float | None] | None:
+    """A view's ``CameraState.missing_while_rising`` after a check: the lowest of its missing material (``missing``,
+    %) and of its newest band's (``band_missing``; None: no band figures) at the checks where it read the part
+    rising (``rise``: fine or else coarse growth, at least :data:`COARSE_ROSE_BEFORE_PCT`), ``kept`` from the
+    earlier ones (None: none yet)."""
+    if rise is None or rise < COARSE_ROSE_BEFORE_PCT:
+        return kept
+    if kept is None:
+        return missing, band_missing
+    return min(kept[0], missing), min((x for x in (kept[1], band_missing) if x is not None), default=None)
+
+
+def standing_offset(result: ShapeResult, while_rising: tuple[float, float | None] | None) -> bool:
+    """Whether a view's missing material (``result``) is no more than it read at a check where it saw the part
+    rise (``while_rising``: its lowest missing material, overall and of the newest band, at such checks;
+    :func:`lowest_missing_while_rising`): under half its threshold more overall, and under
+    :data:`BAND_GONE_SINCE_RISE_PCT` more of the newest band. Material missing while the part rose is a face the
+    camera cannot tell from what lies behind it (decide's "visibly grows" rule); the same share missing later is
+    that face still, while a stop leaves the newest layers missing on top of it."""
+    if while_rising is None:
+        return False
+    missing, band = while_rising
+    if result.missing_pct - missing >= result.threshold / 2.0:
+        return False
+    return band is None or result.band_missing_pct is None or \
+        result.band_missing_pct - band < BAND_GONE_SINCE_RISE_PCT
+
+
+def rise_for_loose_material(usable: Mapping[str, ShapeResult], growth: Sequence[float]) -> float | None:
+    """The part's rise since the previous check (% of the expected) that :func:`core.tangle.loose_material` weighs
+    (``rise_pct``), or None: the median of ``growth`` (the fine readings, ``ShapeResult.growth_pct``, of -15 % or
+    more) when two or more views measured it, or the only usable camera did (there is no other view to ask);
+    else, where views read the rise coarsely (``coarse_growth_pct``: a part seen small, a rise of 4-6 px per
+    check), the median over the views of each one's fine reading or else its coarse one, under the same
+    condition. A coarse reading is +-25 %, and a view that cannot see the top rise reads 0 at every check, so
+    alone it proves nothing (a normal print reads under 50 % at a few checks); here it is only the second
+    witness of material new beyond the outline, which such a check of a normal print does not show: a part
+    knocked off or stopped under a pile of strands does both."""
+    if len(growth) >= 2 or (growth and len(usable) == 1):
+        return float(np.median(growth))
+    readings = [r.growth_pct if r.growth_pct is not None else r.coarse_growth_pct for r in usable.values()]
+    readings = [g for g in readings if g is not None and g >= -15.0]
+    if len(readings) >= 2 or (readings and len(usable) == 1):
+        return float(np.median(readings))
+    return None
+
+
+def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings: DetectionSettings,
+           unreadable: Mapping[str, str] | Sequence[str] = (), *,
+           layer_shift: LayerShift | None = None, top_closing: bool = False,
+           pairs: Sequence[Sequence[str]] = (),
+           extra_before: Mapping[str, float] | None = None,
+           band_coverage_before: Mapping[str, float] | None = None,
+           rise_before: Mapping[str, float | None] | None = None,
+           missing_before: Mapping[str, float] | None = None,
+           missing_at_rise: Mapping[str, float] | None = None,
+           band_texture_before: Mapping[str, float] | None = None,
+           held_rise_before: Mapping[str, float] | None = None,
+           missing_while_rising: Mapping[str, tuple[float, float | None]] | None = None) -> tuple[str, list[str]]:
+    """The combined decision rule -> (verdict, reasons).
+
+    * A camera counts only when it gave a frame and its background still matches the bed
+      (``usable``); dead or disturbed cameras are reported, never a cause for a pause.
+    * fail when at least half of the usable cameras (and at least ``min_failing_cameras``) fail
+      their shape check (Eq. 4.1 with tolerance over its threshold, or the newest band over the
+      band threshold), or when one camera fails decisively (missing AND extra material, or the whole
+      part found elsewhere: the part moved; extra material four times the threshold); extra material
+      alone that appeared at once (``extra_before``: each camera's extra at its previous check) in one
+      camera of a stereo pair (``pairs``) whose partner passes and sees none does not count
+      (:func:`unseen_by_partner`); views read against a relit background (``ShapeResult.relit``) count only
+      alongside a failing view that was not (in no share of views, nor for loose material or a layer shift),
+    * while the part visibly grows (median growth >= 50 %), a camera failing on missing material
+      alone does not count (a face the colour of what lies behind it looks missing); nor does missing
+      material alone from no more than half of the usable cameras not relit unless the part stalled, nor from a
+      camera's first look at the part (``ShapeResult.first_look``: the growth test needs a second one), nor
+      where, as a group, it is not the background (``ShapeResult.background_missing_pct``: a face of nearly
+      the bed's colour), nor from a view that missed as much while it saw the part rise (``missing_while_rising``:
+      :func:`standing_offset`);
+    * or when the part stopped growing (corroborated by missing material in at least one view:
+      25 % of the newest band, or half the threshold overall, in a view that saw no rise, finely or, where it
+      reads the rise only to the pixel, coarsely): the median over
+      cameras of the observed rise of the part's upper outline since the previous check (readings below
+      -15 %, a sunk outline, left out) is below ``min_growth_pct`` of the expected rise; or, unless a
+      top surface closes, when two or more cameras measured growth, its median is under 50 % and two views
+      that saw under 50 % each miss 15 % of the newest band or half the threshold overall (strands piling on
+      a stopped part lift the outline a little but fill no band; a part that stopped before the previous check
+      misses more below its band); or, unless a top surface closes, when the median is under
+      ``min_growth_pct`` and a view that saw no rise (or could not measure one) shows its newest band less
+      than half covered by the part's colours where its band read solid (80 %) at an earlier check
+      (``ShapeResult.band_part_coverage``; ``band_coverage_before``: each camera's highest reading at its
+      earlier checks; core/nest.py: a nest of strands over a stopped part); or, where no camera measured
+      growth and no top surface closes, when the median of the coarse readings (``coarse_growth_pct``) of the
+      views that read a rise of 50 % at their previous check (``rise_before``) is under ``min_growth_pct`` and a
+      view reading under it misses half the threshold more of the part than at its previous check
+      (``missing_before``); a view that read such a rise at an earlier check and no rise (or no reading) at
+      every check since (``missing_at_rise``: its missing material at that check; :func:`missing_since_rise`)
+      counts too, measured against that check; where a view gives no one-check reading, its reading over the last
+      checks (``ShapeResult.span_growth_pct``) stands in for the fine rules, and a view whose own readings before
+      (``held_rise_before``: fine, else over the span, else coarse, at its previous check; CheckRunner passes it
+      only where the view's reading before that read a rise too, the lower of the two: :func:`held_rise`) were a
+      rise of ``COARSE_ROSE_BEFORE_PCT`` needs no missing material to corroborate it (nor does a view's one-check
+      reading, while every one-check reading reads a stall and no view the full rise: a stop is a change, while
+      strands piled on a stopped part fill its outline); nor do ``STOPPED_VIEWS`` such views that read no rise now
+      (every usable view where fewer are usable: :func:`stopped_views_needed`; each its finest reading: fine, else
+      over the span, else coarse), where the median of every view's finest
+      reading reads none either, need more than a trace (``STOPPED_MIN_MISSING_PCT`` of the part, or twice that of
+      the newest band, in one of them),
+      or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
+      abstains reports no ``error_pct`` and never fails);
+    * or when the cameras together confirm that the newest layers sit sideways on the older ones
+      (``layer_shift``: :func:`layer_shift_of`, computed here when not given; see
+      :func:`core.layer_shift.confirms_layer_shift`);
+    * or when loose material (spaghetti) appeared around the part since the previous check: material new
+      since then, where the model has none, attached to the part and over 2 mm beyond its outline
+      (``ShapeResult.new_outside``), at least 6 mm^2 in two usable views, or 30 mm^2 when only one camera
+      is usable, or 6 mm^2 counting blobs in the bed-marks zone in cameras on two different sides, or
+      in one view while the part's outline rose under half the expected height (median of two or more views,
+      or the only usable camera's own reading, where too few views read it finely each view's coarse reading
+      standing in: :func:`rise_for_loose_material`; not where a top surface closes)
+      (:func:`core.tangle.loose_material`);
+    * or when, with the part's outline rising under half the expected height (the same figure, not where a top
+      surface closes), a view's newest band looks 1.5 times as textured as at its previous check
+      (``ShapeResult.band_texture``; ``band_texture_before``: each camera's reading at its previous check, not a
+      first look; :func:`core.nest.textured_views`), or twice as textured (TEXTURE_JUMP_STRONG) with the part rising
+      under 80 % (PART_SLOWED_SOMEWHAT_PCT): strands piled over a part that slowed, or the bed where it should be;
+    * unknown when no camera and no pair gave usable evidence; ok otherwise.
+    """
+    if layer_shift is None:
+        layer_shift = layer_shift_of(shape)
+    if not isinstance(unreadable, Mapping):
+        unreadable = {cam: "no frame (camera unavailable)" for cam in unreadable}
+    reasons: list[str] = [f"{cam}: {why}: no verdict from this camera" for cam, why in unreadable.items()]
+    usable = {cam: r for cam, r in shape.items() if r.usable}
+    for cam, r in shape.items():
+        if not r.usable:
+            reasons.extend(r.reasons)
+    failing = [r for r in usable.values() if not r.passed]
+    # A part that stopped growing stopped in every view: the growth test is decided on the median over
+    # the cameras that could measure it, so one camera fooled by a top face the colour of the
+    # background cannot pause a print on its own.
+    # An outline that sank is not a part that stopped (material does not vanish; a stalled part reads
+    # 0 +- one pixel step, about 15 % of a check's rise): that camera was fooled at this check or the
+    # previous one (a top face the colour of what lies behind it); readings below -15 % are left out.
+    band_coverage_before = band_coverage_before or {}
+
+    def stall_rules(read: Mapping[str, float], stopped: Collection[str] = ()) -> tuple[bool, list]:
+        """Whether the part stalled by the rules below on the growth readings ``read`` (camera -> %, each of -15 %
+        or more), and the views whose newest band is bare (for the reasons). ``stopped``: views whose low reading
+        needs no missing material to corroborate it (a rise they read at their previous check)."""
+        measured = {cam: usable[cam] for cam in read}
+        growth = list(read.values())
+        # ... and where the part stopped, its newest layers are missing in a view that sees no rise; without
+        # that, a flat rise is a top skin closing in a colour the camera cannot tell from the bed
+        # (where a top surface closes in the newest layers, ``top_closing``, its smooth skin may read missing
+        # as a whole, like the bed: then only the newest band itself gone counts)
+        # (a view whose rise only reads to the pixel, ``coarse_growth_pct``, and that reads none, is such a view too:
+        # the stall is decided on the fine readings; the missing layers show where they show)
+        still = ({cam for cam, reading in read.items() if reading < settings.min_growth_pct}
+                 | {cam for cam, r in usable.items()
+                    if cam not in read and r.growth_pct is None and r.coarse_growth_pct is not None
+                    and r.coarse_growth_pct < settings.min_growth_pct})
+        band_gone = any((usable[cam].band_missing_pct or 0.0) >= 25.0
+                        or (not top_closing and (usable[cam].missing_pct >= usable[cam].threshold / 2.0
+                                                 or cam in stopped))
+                        for cam in still)
+        stalled = bool(growth) and float(np.median(growth)) < settings.min_growth_pct and band_gone
+        # A part rising at under half the expected rate while two views that see it slow each miss part of its
+        # newest band has slowed, not been misread: strands piling on a stopped part lift the outline a little
+        # but fill no band; a face the colour of the bed reads missing but its outline rises fully.
+        # (a view misses part of the newest band, or, where the part stopped before the previous check and the
+        # gap reaches below the band, half the threshold of the whole part, as for band_gone above)
+        slowed_views = [r for cam, r in measured.items()
+                        if read[cam] < 50.0 and ((r.band_missing_pct or 0.0) >= 15.0
+                                                 or r.missing_pct >= r.threshold / 2.0 or cam in stopped)]
+        stalled = stalled or (not top_closing and len(growth) >= 2 and float(np.median(growth)) < 50.0
+                              and len(slowed_views) >= 2)
+        # A part that stopped under a nest of strands (spaghetti) reads no missing material: the pile fills its
+        # outline. But its newest band, in the part's colours, is then a mesh of strands over the bed or the bed
+        # itself: less than half covered by the part's material, in a view whose band read solid before (a face
+        # in the bed's colour reads bare at every check) and that saw no rise or could not measure one. Not where
+        # a top surface closes (a smooth top skin may look like the bed).
+        bare_band = [r for r in usable.values()
+                     if (r.growth_pct is None or r.growth_pct < settings.min_growth_pct)
+                     and r.band_part_coverage is not None and r.band_part_coverage < NEST_MAX_COVERAGE
+                     and band_coverage_before.get(r.camera, 0.0) >= SOLID_MIN_COVERAGE]
+        stalled = stalled or (not top_closing and bool(growth)
+                              and float(np.median(growth)) < settings.min_growth_pct and bool(bare_band))
+        return stalled, bare_band
+
+    measured = {cam: r for cam, r in usable.items() if r.growth_pct is not None and r.growth_pct >= -15.0}
+    growth = [r.growth_pct for r in measured.values()]
+    # A stop is a change: a view whose own readings at its previous checks read the part rising (``held_rise_before``,
+    # held_rise) needs no missing material to corroborate a one-check reading of no rise either. Strands piled on a
+    # stopped part fill its outline (nothing reads missing), while a top the camera cannot tell from what lies behind
+    # it never reads a rise at two checks running. Not while a view reads the part rising as expected (fine, over its
+    # span or coarse): a stop shows in every view, and with nothing missing nothing else stands against that view (a top
+    # misread at one check reads 0 in one view and twice the rise in another, then rises again).
+    # Nor while a view's one-check reading still reads some rise: only where every one reads a stall (a view reading
+    # -8 % beside one reading 29 % over a face it misses all along is a resized frame's pixel step, not a stop).
+    unanimous = all(r.growth_pct < settings.min_growth_pct for r in measured.values())
+    rose_before = set() if not unanimous or any(rise_read(r) >= FULL_RISE_PCT for r in usable.values()) else {
+        cam for cam in measured if ((held_rise_before or {}).get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT}
+    stalled, bare_band = stall_rules({cam: r.growth_pct for cam, r in measured.items()}, rose_before)
+    growth_since = "since the previous check"
+    # Where one check's rise is too small for any reading in a view (2-3 px: a part seen small, checks a few
+    # layers apart), its reading over more checks (``ShapeResult.span_growth_pct``, as fine, but from an older
+    # look) stands in for the same rules: a stall persists, so it is read, once the span lies after the stop.
+    # (in addition to the one-check readings, never instead: a span reaching back before a stop reads part of
+    # the rise, where a one-check reading already reads none)
+    spanned = {cam: r.span_growth_pct for cam, r in usable.items()
+               if r.growth_pct is None and r.span_growth_pct is not None and r.span_growth_pct >= -15.0}
+    if spanned and not stalled:
+        with_span = {**{cam: r.growth_pct for cam, r in measured.items()}, **spanned}
+        # A gap a few pixels deep hides in the outline's tolerance, so a view whose span reading is the first
+        # to see the part slow misses nothing yet; its own readings at its previous checks (``held_rise_before``:
+        # fine, else over the span, else coarse, held by the reading before it: held_rise) corroborate it instead
+        # when they read the part rising: a stop is a change, while a top the camera cannot tell from what lies
+        # behind it never reads a rise, or reads one at one check and none at the next (pixel-step noise).
+        stopped = {cam for cam in spanned
+                   if ((held_rise_before or {}).get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT}
+        stalled, bare_band = stall_rules(with_span, stopped)
+        if stalled:
+            growth = list(with_span.values())
+            growth_since = "over the last checks"
+    # Where no camera resolves the rise (4-6 px per check: a part seen small, checks a few layers apart) the
+    # coarse readings (``ShapeResult.coarse_growth_pct``, to the pixel, +-25 %) stand in, each from a view that
+    # read the part rising (50 %) at its previous check (``rise_before``: a view that never sees the top rise, a
+    # face in the bed's colour, reads 0 at every check), and corroborated by material gone missing since that
+    # check in a view reading no rise (``missing_before``: a face the colour of the bed misses the same at every
+    # check). A stop is a change: the part rose, now it does not, and its newest layers are missing.
+    # A stop falls between two checks: at the first check after it the newest layers may be too thin to miss
+    # (a stop late in the interval), and at the next one the view's previous reading is the stop itself. So a
+    # view that read the part rising at an earlier check and no rise (or no reading: the model's outline did
+    # not rise in it) at every check since (``missing_at_rise``: its missing material at that check,
+    # CameraState.rise_missing, missing_since_rise) counts as well, its missing material measured against that
+    # check: the part rose, then stopped, and its newest layers went missing since.
+    rise_before, missing_before = rise_before or {}, missing_before or {}
+    missing_at_rise = missing_at_rise or {}
+    rose = {cam: (missing_at_rise[cam] if cam in missing_at_rise else missing_before.get(cam))
+            for cam in usable
+            if cam in missing_at_rise or (rise_before.get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT}
+    coarse = {cam: usable[cam].coarse_growth_pct for cam in rose
+              if usable[cam].coarse_growth_pct is not None and usable[cam].coarse_growth_pct >= -15.0}
+    coarse_stalled = (not growth and not top_closing and bool(coarse)
+                      and float(np.median(list(coarse.values()))) < settings.min_growth_pct
+                      and any(coarse[cam] < settings.min_growth_pct and rose[cam] is not None
+                              and usable[cam].missing_pct - rose[cam] >= usable[cam].threshold / 2.0
+                              for cam in coarse))
+    if coarse_stalled:
+        growth = list(coarse.values())
+    stalled = stalled or coarse_stalled
+    # Views that each held a rise over their last readings (``held_rise_before``) and read none now, STOPPED_VIEWS of
+    # them, stalled with little missing yet (a stop late in the interval leaves the newest layers too thin to miss
+    # half the threshold): a stop is a change, and views that see it at the same check are no pixel step of one view
+    # (a top a view cannot resolve reads 0-200 % by turns). Each view's reading is its finest (fine, else over the
+    # span, else coarse), and their median must read no rise too; a trace of the newest layers must be missing in
+    # one of them (STOPPED_MIN_MISSING_PCT): two views misread a black top on a black bed under JPEG's blocks as
+    # still, with nothing missing (the default set's layer_shift_05 at quality 35). Where one view is usable (a
+    # one-camera rig) it is every view: nothing outvotes it, and the trace stands against its pixel step.
+    readings = {cam: reading for cam, r in usable.items()
+                if (reading := finest_reading(r)) is not None and reading >= -15.0}
+    stopped_views = [usable[cam] for cam, reading in readings.items() if reading < settings.min_growth_pct
+                     and ((held_rise_before or {}).get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT]
+    if (not stalled and not top_closing and len(stopped_views) >= stopped_views_needed(len(usable))
+            and float(np.median(list(readings.values()))) < settings.min_growth_pct
+            and any(r.missing_pct >= STOPPED_MIN_MISSING_PCT
+                    or (r.band_missing_pct or 0.0) >= 2.0 * STOPPED_MIN_MISSING_PCT for r in stopped_views)):
+        stalled, growth = True, list(readings.values())
+    size_fail, size_usable = [], 0
+    for key, entry in size.items():
+        error = entry.get("error_pct") if isinstance(entry, Mapping) else None
+        if error is None or entry.get("abstained"):
+            continue
+        size_usable += 1
+        limit = float(entry.get("threshold_pct", settings.size_threshold_pct))
+        if error > limit:
+            size_fail.append(f"{key}: size differs from the model by {error:.1f}% (limit {limit:g}%)")
+    if not usable and not size_usable:
+        return "unknown", reasons or ["no usable camera at this check"]
+    # One camera seeing "material missing" or "extra material" may be fooled (a face the colour of
+    # the background, a reflection); a failure of the part is seen from most sides. So plain shape
+    # failures must come from at least half of the usable cameras (and ``min_failing_cameras``);
+    # a decisive signature (the part displaced, the newest layers offset) suffices from one camera.
+    # (a view read against a relit background only corroborates: no share of views counts it, here or below)
+    plain_views = sum(not r.relit for r in usable.values())
+    needed = max(settings.min_failing_cameras, math.ceil(plain_views / 2))
+    decisive = [r for r in failing if r.decisive]
+    missing_only = [r for r in failing
+                    if not r.decisive and 0 < r.missing_pct and r.extra_pct * 2.0 <= r.missing_pct]
+    # A camera's first look cannot tell a face the colour of what lies behind it from a part that printed
+    # less than the model says: one frame shows both as missing material. The next check can (the growth
+    # test), so there missing material alone waits for it.
+    waiting = {r.camera for r in missing_only if r.first_look}
+    # Nor does missing material that, as a group, is not the background: a face of nearly its colour (filament
+    # in the bed's colour) passes for it pixel by pixel, but not as a group (``background_missing_pct``)
+    waiting |= {r.camera for r in missing_only if r.background_missing_pct is not None
+                and r.background_missing_pct + r.extra_pct <= r.threshold
+                and (r.band_error_pct is None or r.background_band_missing_pct is None
+                     or r.background_band_missing_pct + (r.band_error_pct - (r.band_missing_pct or 0.0))
+                     <= r.band_threshold)}
+    # Nor does missing material a view already read at a check where it saw the part rise (a standing offset: a
+    # face it cannot tell from what lies behind it, as the "visibly grows" rule below says), when no more of the
+    # part and of its newest band is missing now: a stop leaves the newest layers missing on top of it
+    waiting |= {r.camera for r in missing_only if standing_offset(r, (missing_while_rising or {}).get(r.camera))}
+    failing = [r for r in failing if r.camera not in waiting]
+    missing_only = [r for r in missing_only if r.camera not in waiting]
+    if missing_only and not stalled and 2 * len(missing_only) <= plain_views:
+        # "Missing" alone, from no more than half of the cameras, while the part has not stopped growing:
+        # faces the colour of what lies behind them (dark on dark, grey on grey) look exactly like this,
+        # a runout does not (it stalls the growth, and the part's top is gone from most views).
+        failing = [r for r in failing if r not in missing_only]
+    # (here every reading counts: a sinking outline is evidence against growth, e.g. a part knocked over)
+    rising = [r.growth_pct for r in usable.values() if r.growth_pct is not None]
+    if rising and float(np.median(rising)) >= 50.0:
+        # The part's outline rises as the model says: "material missing" without any extra material
+        # is then a face the camera cannot tell from what lies behind it, not a runout.
+        failing = [r for r in failing if r.decisive or r.extra_pct * 2.0 > r.missing_pct]
+    # Extra material alone that appeared at once in one camera of a stereo pair whose partner, looking from
+    # nearly the same side, sees none at all (and passes) is not standing there: a hair of stringing (18 %
+    # "extra" in one view of a pair, 0 in the other; docs/detection-shadows.md). Material new since the
+    # previous check is the tangle rule's to judge (two views). Extra material that built up check by check
+    # (a layer shift along the pair's line of sight) still counts; so does a decisive view (a detached part
+    # is sometimes seen by one camera of a pair only), and a pair with one usable camera is a single view.
+    extra_before = extra_before or {}
+    failing = [r for r in failing if not unseen_by_partner(r, usable, pairs, extra_before.get(r.camera))]
+    # A view read against a relit background (``ShapeResult.relit``: a reflection swept across a glossy bed) guesses
+    # the light under the part from the bed around it; where the reflection crosses the part it reads lit bed as
+    # material (extra where there is none, or a missing top as there). It corroborates a view that was not
+    # relit, never fails a print alone.
+    if all(r.relit for r in [*failing, *decisive]):
+        failing, decisive = [], []
+    shape_fail = bool(decisive) or len(failing) >= needed
+    fail_reasons = [reason for r in (failing if shape_fail else []) for reason in r.reasons]
+    if stalled:
+        fail_reasons.append(f"the part has not grown as expected {growth_since}: "
+                            f"{float(np.median(growth)):.0f}% of the expected rise seen "
+                            f"(median of {len(growth)} camera(s), limit {settings.min_growth_pct:g}%): "
+                            f"runout, clog or a stopped print?")
+        if not top_closing:
+            fail_reasons.extend(f"{r.camera}: the newest layers show the part's colours over "
+                                f"{100.0 * r.band_part_coverage:.0f}% of their area "
+                                f"({100.0 * band_coverage_before[r.camera]:.0f}% at an earlier check): "
+                                f"strands or bare bed where the part should be" for r in bare_band)
+    if layer_shift is not None and confirms_layer_shift(layer_shift, settings.layer_shift_mm):
+        fail_reasons.append(describe_layer_shift(layer_shift))
+        shape_fail = True
+    # The rise the loose-material rule weighs: the median of the fine readings (two or more views, or a one-camera
+    # rig's own); where they are too few (a part seen small: a rise of 4-6 px per check), each view's fine reading
+    # or else its coarse one (``coarse_growth_pct``, +-25 %) stands in (rise_for_loose_material)
+    rise_pct = None if top_closing else rise_for_loose_material(usable, growth)
+    # (a relit view's material beside the part may be lit bed: no loose material from it)
+    seen_loose = {cam: r for cam, r in usable.items() if not r.relit}
+    tangle = loose_material({cam: None if r.new_outside is None else r.new_outside.area_mm2
+                             for cam, r in seen_loose.items()},
+                            with_foot={cam: r.new_outside.with_foot_mm2 for cam, r in seen_loose.items()
+                                       if r.new_outside is not None},
+                            directions={cam: r.new_outside.direction for cam, r in seen_loose.items()
+                                        if r.new_outside is not None},
+                            # (not where a top surface closes: a ridge's or apex's last layers are too thin
+                            # for the outline to show them rise, so a normal part reads 0 % there)
+                            rise_pct=rise_pct,
+                            surrounding={cam for cam, r in seen_loose.items()
+                                         if r.new_outside is not None and r.new_outside.surrounds_part})
+    if tangle is not None:
+        fail_reasons.append(tangle)
+        shape_fail = True
+    # A part that slowed while a view's newest band turned textured (``band_texture_before``: each camera's
+    # band texture at its previous check): strands piled over it fill its outline and lift it a little, but each
+    # strand brings its own highlight and shadow where the printed face was smooth (the bed seen where the part
+    # should be is textured too); the slow rise is the second witness, as for one view of loose material
+    # (a rise of 50-79 % only with a band changed markedly: a coarse rise reading is +-25 %)
+    jump = texture_jump_for(rise_pct)
+    textured = ({} if jump is None else
+                textured_views({cam: r.band_texture for cam, r in usable.items()}, band_texture_before or {}, jump))
+    if textured:
+        fail_reasons.extend(f"{cam}: the newest layers look {ratio:.1f} times as textured as at the previous check "
+                            f"while the part rose {rise_pct:.0f}% of the expected height: strands piled over the "
+                            f"part, or the bed where it should be?" for cam, ratio in sorted(textured.items()))
+        shape_fail = True
+    if shape_fail or size_fail or stalled:
+        return "fail", fail_reasons + size_fail + reasons
+    return "ok", reasons
