@@ -5,6 +5,7 @@ layer-shift evidence of the usable views)."""
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Collection, Mapping, Sequence
 
 import numpy as np
@@ -206,96 +207,24 @@ def rise_for_loose_material(usable: Mapping[str, ShapeResult], growth: Sequence[
     return None
 
 
-def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings: DetectionSettings,
-           unreadable: Mapping[str, str] | Sequence[str] = (), *,
-           layer_shift: LayerShift | None = None, top_closing: bool = False,
-           pairs: Sequence[Sequence[str]] = (),
-           extra_before: Mapping[str, float] | None = None,
-           band_coverage_before: Mapping[str, float] | None = None,
-           rise_before: Mapping[str, float | None] | None = None,
-           missing_before: Mapping[str, float] | None = None,
-           missing_at_rise: Mapping[str, float] | None = None,
-           band_texture_before: Mapping[str, float] | None = None,
-           held_rise_before: Mapping[str, float] | None = None,
-           missing_while_rising: Mapping[str, tuple[float, float | None]] | None = None) -> tuple[str, list[str]]:
-    """The combined decision rule -> (verdict, reasons).
+@dataclass(frozen=True)
+class Stall:
+    """Whether the part stopped growing at a check (:func:`part_stalled`)."""
+    stalled: bool
+    #: the rise readings (% of the expected) the stall was read on, or this check's fine readings where none fired
+    #: (decide quotes their median, and the loose-material rule weighs them: :func:`rise_for_loose_material`)
+    growth: list[float]
+    #: over what the rise was read: "since the previous check" or "over the last checks"
+    since: str
+    #: views whose newest band is bare where it read solid before (a nest of strands over a stopped part)
+    bare_band: list[ShapeResult]
 
-    * A camera counts only when it gave a frame and its background still matches the bed
-      (``usable``); dead or disturbed cameras are reported, never a cause for a pause.
-    * fail when at least half of the usable cameras (and at least ``min_failing_cameras``) fail
-      their shape check (Eq. 4.1 with tolerance over its threshold, or the newest band over the
-      band threshold), or when one camera fails decisively (missing AND extra material, or the whole
-      part found elsewhere: the part moved; extra material four times the threshold); extra material
-      alone that appeared at once (``extra_before``: each camera's extra at its previous check) in one
-      camera of a stereo pair (``pairs``) whose partner passes and sees none does not count
-      (:func:`unseen_by_partner`); views read against a relit background (``ShapeResult.relit``) count only
-      alongside a failing view that was not (in no share of views, nor for loose material or a layer shift),
-    * while the part visibly grows (median growth >= 50 %), a camera failing on missing material
-      alone does not count (a face the colour of what lies behind it looks missing); nor does missing
-      material alone from no more than half of the usable cameras not relit unless the part stalled, nor from a
-      camera's first look at the part (``ShapeResult.first_look``: the growth test needs a second one), nor
-      where, as a group, it is not the background (``ShapeResult.background_missing_pct``: a face of nearly
-      the bed's colour), nor from a view that missed as much while it saw the part rise (``missing_while_rising``:
-      :func:`standing_offset`);
-    * or when the part stopped growing (corroborated by missing material in at least one view:
-      25 % of the newest band, or half the threshold overall, in a view that saw no rise, finely or, where it
-      reads the rise only to the pixel, coarsely): the median over
-      cameras of the observed rise of the part's upper outline since the previous check (readings below
-      -15 %, a sunk outline, left out) is below ``min_growth_pct`` of the expected rise; or, unless a
-      top surface closes, when two or more cameras measured growth, its median is under 50 % and two views
-      that saw under 50 % each miss 15 % of the newest band or half the threshold overall (strands piling on
-      a stopped part lift the outline a little but fill no band; a part that stopped before the previous check
-      misses more below its band); or, unless a top surface closes, when the median is under
-      ``min_growth_pct`` and a view that saw no rise (or could not measure one) shows its newest band less
-      than half covered by the part's colours where its band read solid (80 %) at an earlier check
-      (``ShapeResult.band_part_coverage``; ``band_coverage_before``: each camera's highest reading at its
-      earlier checks; core/nest.py: a nest of strands over a stopped part); or, where no camera measured
-      growth and no top surface closes, when the median of the coarse readings (``coarse_growth_pct``) of the
-      views that read a rise of 50 % at their previous check (``rise_before``) is under ``min_growth_pct`` and a
-      view reading under it misses half the threshold more of the part than at its previous check
-      (``missing_before``); a view that read such a rise at an earlier check and no rise (or no reading) at
-      every check since (``missing_at_rise``: its missing material at that check; :func:`missing_since_rise`)
-      counts too, measured against that check; where a view gives no one-check reading, its reading over the last
-      checks (``ShapeResult.span_growth_pct``) stands in for the fine rules, and a view whose own readings before
-      (``held_rise_before``: fine, else over the span, else coarse, at its previous check; CheckRunner passes it
-      only where the view's reading before that read a rise too, the lower of the two: :func:`held_rise`) were a
-      rise of ``COARSE_ROSE_BEFORE_PCT`` needs no missing material to corroborate it (nor does a view's one-check
-      reading, while every one-check reading reads a stall and no view the full rise: a stop is a change, while
-      strands piled on a stopped part fill its outline); nor do ``STOPPED_VIEWS`` such views that read no rise now
-      (every usable view where fewer are usable: :func:`stopped_views_needed`; each its finest reading: fine, else
-      over the span, else coarse), where the median of every view's finest
-      reading reads none either, need more than a trace (``STOPPED_MIN_MISSING_PCT`` of the part, or twice that of
-      the newest band, in one of them),
-      or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
-      abstains reports no ``error_pct`` and never fails);
-    * or when the cameras together confirm that the newest layers sit sideways on the older ones
-      (``layer_shift``: :func:`layer_shift_of`, computed here when not given; see
-      :func:`core.layer_shift.confirms_layer_shift`);
-    * or when loose material (spaghetti) appeared around the part since the previous check: material new
-      since then, where the model has none, attached to the part and over 2 mm beyond its outline
-      (``ShapeResult.new_outside``), at least 6 mm^2 in two usable views, or 30 mm^2 when only one camera
-      is usable, or 6 mm^2 counting blobs in the bed-marks zone in cameras on two different sides, or
-      in one view while the part's outline rose under half the expected height (median of two or more views,
-      or the only usable camera's own reading, where too few views read it finely each view's coarse reading
-      standing in: :func:`rise_for_loose_material`; not where a top surface closes)
-      (:func:`core.tangle.loose_material`);
-    * or when, with the part's outline rising under half the expected height (the same figure, not where a top
-      surface closes), a view's newest band looks 1.5 times as textured as at its previous check
-      (``ShapeResult.band_texture``; ``band_texture_before``: each camera's reading at its previous check, not a
-      first look; :func:`core.nest.textured_views`), or twice as textured (TEXTURE_JUMP_STRONG) with the part rising
-      under 80 % (PART_SLOWED_SOMEWHAT_PCT): strands piled over a part that slowed, or the bed where it should be;
-    * unknown when no camera and no pair gave usable evidence; ok otherwise.
-    """
-    if layer_shift is None:
-        layer_shift = layer_shift_of(shape)
-    if not isinstance(unreadable, Mapping):
-        unreadable = {cam: "no frame (camera unavailable)" for cam in unreadable}
-    reasons: list[str] = [f"{cam}: {why}: no verdict from this camera" for cam, why in unreadable.items()]
-    usable = {cam: r for cam, r in shape.items() if r.usable}
-    for cam, r in shape.items():
-        if not r.usable:
-            reasons.extend(r.reasons)
-    failing = [r for r in usable.values() if not r.passed]
+
+def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings, *, top_closing: bool,
+                 band_coverage_before: Mapping[str, float] | None, rise_before: Mapping[str, float | None] | None,
+                 missing_before: Mapping[str, float] | None, missing_at_rise: Mapping[str, float] | None,
+                 held_rise_before: Mapping[str, float] | None) -> Stall:
+    """The stall rules of :func:`decide` (its docstring lists them) over the usable views' rise readings."""
     # A part that stopped growing stopped in every view: the growth test is decided on the median over
     # the cameras that could measure it, so one camera fooled by a top face the colour of the
     # background cannot pause a print on its own.
@@ -427,6 +356,103 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
             and any(r.missing_pct >= STOPPED_MIN_MISSING_PCT
                     or (r.band_missing_pct or 0.0) >= 2.0 * STOPPED_MIN_MISSING_PCT for r in stopped_views)):
         stalled, growth = True, list(readings.values())
+    return Stall(stalled, growth, growth_since, bare_band)
+
+
+def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings: DetectionSettings,
+           unreadable: Mapping[str, str] | Sequence[str] = (), *,
+           layer_shift: LayerShift | None = None, top_closing: bool = False,
+           pairs: Sequence[Sequence[str]] = (),
+           extra_before: Mapping[str, float] | None = None,
+           band_coverage_before: Mapping[str, float] | None = None,
+           rise_before: Mapping[str, float | None] | None = None,
+           missing_before: Mapping[str, float] | None = None,
+           missing_at_rise: Mapping[str, float] | None = None,
+           band_texture_before: Mapping[str, float] | None = None,
+           held_rise_before: Mapping[str, float] | None = None,
+           missing_while_rising: Mapping[str, tuple[float, float | None]] | None = None) -> tuple[str, list[str]]:
+    """The combined decision rule -> (verdict, reasons).
+
+    * A camera counts only when it gave a frame and its background still matches the bed
+      (``usable``); dead or disturbed cameras are reported, never a cause for a pause.
+    * fail when at least half of the usable cameras (and at least ``min_failing_cameras``) fail
+      their shape check (Eq. 4.1 with tolerance over its threshold, or the newest band over the
+      band threshold), or when one camera fails decisively (missing AND extra material, or the whole
+      part found elsewhere: the part moved; extra material four times the threshold); extra material
+      alone that appeared at once (``extra_before``: each camera's extra at its previous check) in one
+      camera of a stereo pair (``pairs``) whose partner passes and sees none does not count
+      (:func:`unseen_by_partner`); views read against a relit background (``ShapeResult.relit``) count only
+      alongside a failing view that was not (in no share of views, nor for loose material or a layer shift),
+    * while the part visibly grows (median growth >= 50 %), a camera failing on missing material
+      alone does not count (a face the colour of what lies behind it looks missing); nor does missing
+      material alone from no more than half of the usable cameras not relit unless the part stalled, nor from a
+      camera's first look at the part (``ShapeResult.first_look``: the growth test needs a second one), nor
+      where, as a group, it is not the background (``ShapeResult.background_missing_pct``: a face of nearly
+      the bed's colour), nor from a view that missed as much while it saw the part rise (``missing_while_rising``:
+      :func:`standing_offset`);
+    * or when the part stopped growing (corroborated by missing material in at least one view:
+      25 % of the newest band, or half the threshold overall, in a view that saw no rise, finely or, where it
+      reads the rise only to the pixel, coarsely): the median over
+      cameras of the observed rise of the part's upper outline since the previous check (readings below
+      -15 %, a sunk outline, left out) is below ``min_growth_pct`` of the expected rise; or, unless a
+      top surface closes, when two or more cameras measured growth, its median is under 50 % and two views
+      that saw under 50 % each miss 15 % of the newest band or half the threshold overall (strands piling on
+      a stopped part lift the outline a little but fill no band; a part that stopped before the previous check
+      misses more below its band); or, unless a top surface closes, when the median is under
+      ``min_growth_pct`` and a view that saw no rise (or could not measure one) shows its newest band less
+      than half covered by the part's colours where its band read solid (80 %) at an earlier check
+      (``ShapeResult.band_part_coverage``; ``band_coverage_before``: each camera's highest reading at its
+      earlier checks; core/nest.py: a nest of strands over a stopped part); or, where no camera measured
+      growth and no top surface closes, when the median of the coarse readings (``coarse_growth_pct``) of the
+      views that read a rise of 50 % at their previous check (``rise_before``) is under ``min_growth_pct`` and a
+      view reading under it misses half the threshold more of the part than at its previous check
+      (``missing_before``); a view that read such a rise at an earlier check and no rise (or no reading) at
+      every check since (``missing_at_rise``: its missing material at that check; :func:`missing_since_rise`)
+      counts too, measured against that check; where a view gives no one-check reading, its reading over the last
+      checks (``ShapeResult.span_growth_pct``) stands in for the fine rules, and a view whose own readings before
+      (``held_rise_before``: fine, else over the span, else coarse, at its previous check; CheckRunner passes it
+      only where the view's reading before that read a rise too, the lower of the two: :func:`held_rise`) were a
+      rise of ``COARSE_ROSE_BEFORE_PCT`` needs no missing material to corroborate it (nor does a view's one-check
+      reading, while every one-check reading reads a stall and no view the full rise: a stop is a change, while
+      strands piled on a stopped part fill its outline); nor do ``STOPPED_VIEWS`` such views that read no rise now
+      (every usable view where fewer are usable: :func:`stopped_views_needed`; each its finest reading: fine, else
+      over the span, else coarse), where the median of every view's finest
+      reading reads none either, need more than a trace (``STOPPED_MIN_MISSING_PCT`` of the part, or twice that of
+      the newest band, in one of them),
+      or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
+      abstains reports no ``error_pct`` and never fails);
+    * or when the cameras together confirm that the newest layers sit sideways on the older ones
+      (``layer_shift``: :func:`layer_shift_of`, computed here when not given; see
+      :func:`core.layer_shift.confirms_layer_shift`);
+    * or when loose material (spaghetti) appeared around the part since the previous check: material new
+      since then, where the model has none, attached to the part and over 2 mm beyond its outline
+      (``ShapeResult.new_outside``), at least 6 mm^2 in two usable views, or 30 mm^2 when only one camera
+      is usable, or 6 mm^2 counting blobs in the bed-marks zone in cameras on two different sides, or
+      in one view while the part's outline rose under half the expected height (median of two or more views,
+      or the only usable camera's own reading, where too few views read it finely each view's coarse reading
+      standing in: :func:`rise_for_loose_material`; not where a top surface closes)
+      (:func:`core.tangle.loose_material`);
+    * or when, with the part's outline rising under half the expected height (the same figure, not where a top
+      surface closes), a view's newest band looks 1.5 times as textured as at its previous check
+      (``ShapeResult.band_texture``; ``band_texture_before``: each camera's reading at its previous check, not a
+      first look; :func:`core.nest.textured_views`), or twice as textured (TEXTURE_JUMP_STRONG) with the part rising
+      under 80 % (PART_SLOWED_SOMEWHAT_PCT): strands piled over a part that slowed, or the bed where it should be;
+    * unknown when no camera and no pair gave usable evidence; ok otherwise.
+    """
+    if layer_shift is None:
+        layer_shift = layer_shift_of(shape)
+    if not isinstance(unreadable, Mapping):
+        unreadable = {cam: "no frame (camera unavailable)" for cam in unreadable}
+    reasons: list[str] = [f"{cam}: {why}: no verdict from this camera" for cam, why in unreadable.items()]
+    usable = {cam: r for cam, r in shape.items() if r.usable}
+    for cam, r in shape.items():
+        if not r.usable:
+            reasons.extend(r.reasons)
+    failing = [r for r in usable.values() if not r.passed]
+    stall = part_stalled(usable, settings, top_closing=top_closing, band_coverage_before=band_coverage_before,
+                         rise_before=rise_before, missing_before=missing_before, missing_at_rise=missing_at_rise,
+                         held_rise_before=held_rise_before)
+    stalled, growth, growth_since, bare_band = stall.stalled, stall.growth, stall.since, stall.bare_band
     size_fail, size_usable = [], 0
     for key, entry in size.items():
         error = entry.get("error_pct") if isinstance(entry, Mapping) else None
