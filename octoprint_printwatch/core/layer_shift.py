@@ -708,7 +708,7 @@ def _confirms(shift: LayerShift, min_mm: float, several_share: float, one_view_s
     return (bool(shift.cameras) and shift.magnitude_mm >= min_mm
             and shift.support >= _min_support(shift, several)
             and share >= (several_share if several else one_view_share)
-            and (not sure or shift.overhang >= SHIFT_OVERHANG_SHARE * shift.support)
+            and (not sure or _sticks_out(shift))
             and (straddles_onset or shift.against <= SHIFT_AGAINST * shift.support)
             and (shift.score >= SHIFT_OVER_NULL * shift.null_score or beats_null_apart(shift)))
 
@@ -736,6 +736,11 @@ def beats_null_apart(shift: LayerShift) -> bool:
             and support - 2.0 * against >= SHIFT_OVER_NULL * max(null, 0.0))
 
 
+def _sticks_out(shift: LayerShift) -> bool:
+    """Whether SHIFT_OVERHANG_SHARE of the confirming pixels are material sticking out where the model has none."""
+    return shift.overhang >= SHIFT_OVERHANG_SHARE * shift.support
+
+
 def _one_sided(shift: LayerShift) -> bool:
     """Whether the move the other way is read clearly not there (SHIFT_OPPOSITE_MAX)."""
     return shift.opposite is None or shift.opposite.confirmed_sure < SHIFT_OPPOSITE_MAX
@@ -757,6 +762,8 @@ def is_new(shift: LayerShift) -> bool:
 
 
 def _read_not_there(earlier: LayerShift | None) -> bool:
+    """Whether ``earlier`` (a check's reading of this shift) tested its band and read it under SHIFT_WAS_NOT_THERE of
+    the decided pixels it changes there."""
     return earlier is not None and earlier.moved_sure > 0 and earlier.confirmed_sure < SHIFT_WAS_NOT_THERE
 
 
@@ -768,8 +775,7 @@ def _confirms_grown_in(shift: LayerShift, min_mm: float) -> bool:
     Only with the overhang on one side that a new shift needs (SHIFT_OVERHANG_SHARE, SHIFT_OPPOSITE_MAX): bed inside
     the outline alone is also a part a little narrower than the model, and the rest of the readings of the last
     four checks still rule out an offset there all along (:func:`was_there_before`)."""
-    return (len(shift.before) >= 2 and _read_not_there(shift.before[1]) and _one_sided(shift)
-            and shift.overhang >= SHIFT_OVERHANG_SHARE * shift.support
+    return (len(shift.before) >= 2 and _read_not_there(shift.before[1]) and _one_sided(shift) and _sticks_out(shift)
             and _confirms(shift, min_mm, SHIFT_CONFIRMED, SHIFT_CONFIRMED))
 
 

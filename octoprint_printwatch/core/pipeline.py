@@ -25,8 +25,7 @@ from .errors import PrintWatchError
 from .settings import DetectionSettings
 from .layer_shift import LayerShift, onto_earlier_places
 from .shape_check import (GROWTH_SPAN_CHECKS, ExpectedRegions, ShapeResult, check_shape,
-                          near_any, not_decisive_where_calibrated,
-                          not_decisive_where_placed_before)
+                          near_any, not_decisive_where_it_stood)
 from .nest import SOLID_MIN_COVERAGE, STALL_READ_BELOW_GROWTH_PCT
 from .verdict import (RISE_HELD_READINGS, band_shifts_of, decide, finest_reading, held_rise, layer_shift_of,
                       lowest_missing_while_rising, missing_since_rise)
@@ -622,7 +621,7 @@ class CheckRunner:
                 placed_at=tuple(state.placed_at),
             )
             result = check_shape(**shape_args, candidates=state.shift_candidates, track_candidates=True)
-            result = not_decisive_where_placed_before(not_decisive_where_calibrated(result, shape_args), shape_args)
+            result = not_decisive_where_it_stood(result, shape_args)
             shape_inputs[name] = shape_args
             shape[name] = self._second_look(name, result, shape_args) or result
             if result.usable and result.first_look and result.outline_best_candidate is not None \

@@ -1211,7 +1211,7 @@ def cut_by_the_crop(objects: np.ndarray, extra: np.ndarray) -> tuple[bool, bool]
     """(across, down): whether an object of ``objects`` ((h, w) bool, the crop's) that holds ``extra`` material runs
     from the crop's left edge to its right edge, or from its top edge to its bottom edge: its length in the picture
     is not the crop's to judge."""
-    count, labels = cv2.connectedComponents(objects.astype(np.uint8), connectivity=8)
+    count, labels, _ = components(objects)
     holding = np.zeros(count, bool)
     holding[labels[extra & objects]] = True
     holding[0] = False
@@ -1224,6 +1224,15 @@ def cut_by_the_crop(objects: np.ndarray, extra: np.ndarray) -> tuple[bool, bool]
     across = holding & touching(labels[:, 0]) & touching(labels[:, -1])
     down = holding & touching(labels[0, :]) & touching(labels[-1, :])
     return bool(across.any()), bool(down.any())
+
+
+def or_lying_on_rods(not_the_prints: Callable[[np.ndarray], np.ndarray], on_rods: np.ndarray | None
+                     ) -> Callable[[np.ndarray], np.ndarray]:
+    """``not_the_prints`` (blobs (h, w) bool -> the ones that are not the printer's, (h, w) bool) that also gives the
+    blobs lying on ``on_rods`` (ROD_BLOB_SHARE of their pixels; None: no rods read beyond the crop)."""
+    if on_rods is None:
+        return not_the_prints
+    return lambda blobs: not_the_prints(blobs) | blobs_lying_on(blobs, on_rods, ROD_BLOB_SHARE)
 
 
 def rods_beyond_the_crop(background: np.ndarray, frame: np.ndarray, expected: np.ndarray, search: np.ndarray,
@@ -1588,11 +1597,11 @@ def check_shape(
 
     followed_before = (foreign_before[crop].astype(bool)
                        if foreign_before is not None and foreign_before.shape == (h, w) else None)
-    comparison = compare_masks(observed, bed_evidence, expected_a, band_a, search_a,
-                               dont_care_a, tol, band_reach=max(2 * tol, shift_bound),
-                               flat_max_px=regions.flat_max_px, reflection=reflection_placed,
-                               top_tolerance=tol, linked=~evidence.bed, not_the_prints=not_the_prints,
-                               foreign_before=followed_before)
+    comparing = dict(band_reach=max(2 * tol, shift_bound), flat_max_px=regions.flat_max_px,
+                     reflection=reflection_placed, top_tolerance=tol, linked=~evidence.bed,
+                     foreign_before=followed_before)
+    comparison = compare_masks(observed, bed_evidence, expected_a, band_a, search_a, dont_care_a, tol,
+                               not_the_prints=not_the_prints, **comparing)
     on_rods = None
     if comparison.extra.any() and (x1 - x0 < w or y1 - y0 < h):
         # a rod near the camera, thicker than this crop is wide, is read in a wider view (rods_beyond_the_crop)
@@ -1604,14 +1613,8 @@ def check_shape(
                                         tol, comparison.part_in_place, material_factor, bed_factor, palette)
             if rods.any():
                 on_rods = dilate(rods, tol)
-                comparison = compare_masks(observed, bed_evidence, expected_a, band_a, search_a,
-                                           dont_care_a, tol, band_reach=max(2 * tol, shift_bound),
-                                           flat_max_px=regions.flat_max_px, reflection=reflection_placed,
-                                           top_tolerance=tol, linked=~evidence.bed,
-                                           not_the_prints=lambda extra: (not_the_prints(extra)
-                                                                         | blobs_lying_on(extra, on_rods,
-                                                                                          ROD_BLOB_SHARE)),
-                                           foreign_before=followed_before)
+                comparison = compare_masks(observed, bed_evidence, expected_a, band_a, search_a, dont_care_a, tol,
+                                           not_the_prints=or_lying_on_rods(not_the_prints, on_rods), **comparing)
 
     # Growth since the previous check: the same camera, the same processing, so calibration and
     # alignment errors cancel; a part that stopped growing (runout, clog, spaghetti) shows none of the
@@ -1704,9 +1707,7 @@ def check_shape(
         new_outside = new_material(observed, seen_before, expected_a, search_a, tol, regions.px_per_mm,
                                    ignore=reflection_a, marks=dont_care_a, linked=~evidence.bed,
                                    bed_to_image=regions.bed_to_image,
-                                   not_the_prints=(not_part_colour if on_rods is None else
-                                                   lambda blobs: (not_part_colour(blobs)
-                                                                  | blobs_lying_on(blobs, on_rods, ROD_BLOB_SHARE))),
+                                   not_the_prints=or_lying_on_rods(not_part_colour, on_rods),
                                    # (compare_masks' objects from above, on the same masks: the same
                                    # answer, unless it followed objects of the previous check)
                                    foreign=(comparison.foreign if comparison.foreign is not None
@@ -1732,7 +1733,7 @@ def check_shape(
             # decisive from one camera: the part displaced (missing AND extra), or unexpected material
             # four times the threshold (no camouflage or lighting nuisance adds material; the largest
             # extra on any normal camera-check of the benchmark and hold-outs 1-4 was 19 %)
-            # (see not_decisive_where_calibrated for an outline anchored away from the calibration)
+            # (see not_decisive_where_it_stood for an outline anchored away from the calibration)
             decisive = min(missing_pct, extra_pct) >= threshold / 3.0 or extra_pct >= 4.0 * threshold
             kind = _describe(missing_pct, extra_pct)
             reasons.append(f"{camera}: shape differs from the model by {error_pct:.1f}% "
@@ -1790,41 +1791,22 @@ def check_shape(
     return result
 
 
-def not_decisive_where_calibrated(result: ShapeResult, shape_args: Mapping[str, Any]) -> ShapeResult:
-    """``result`` with ``decisive`` cleared when its "missing and extra material" comes from an outline
-    anchored away from the calibration, else ``result`` itself.
+def not_decisive_where_it_stood(result: ShapeResult, shape_args: Mapping[str, Any]) -> ShapeResult:
+    """``result`` with ``decisive`` cleared when its "missing and extra material" comes from an outline laid away
+    from where the part is known to have stood, else ``result`` itself.
 
-    ``shape_args`` are the keyword arguments of the :func:`check_shape` call that gave ``result``. A
-    camouflaged face can drag a camera's anchor a countable move (the layer-shift limit, at least two
-    tolerances + 1 px) off the calibrated position (0, 0); the outline then reads the part as
-    displaced. When the same check at (0, 0) passes with half the threshold to spare (no newest-band
-    failure, nothing decisive), the part stands where the calibration puts it, and a part that really
-    moved does not come to rest there: the camera still fails, but other cameras must agree. A part
-    found whole elsewhere (``moved_px``) or extra material of four times the threshold stays decisive.
+    ``shape_args`` are the keyword arguments of the :func:`check_shape` call that gave ``result``. Known places:
+    the calibrated position (0, 0), then the places this camera's earlier passing checks laid the outline
+    (``shape_args["placed_at"]``), each a countable move (the layer-shift limit, at least two tolerances + 1 px)
+    from where the outline lies now. A camouflaged face can drag a camera's anchor off the calibration (hold-out 4
+    ``normal_02``), and a part in nearly the bed's colour with its cast shadow at the foot can let the outline walk
+    off the part (s18 ``044_runout`` s2: 12 px at one check); the outline then reads the part as displaced. When the
+    same check at a known place passes with half the threshold to spare (no newest-band failure, nothing decisive),
+    the part stands where it stood, and a part that detached or whose newest layers shifted does not come to rest
+    there (its top, at least, is elsewhere): the camera still fails, but other cameras must agree. A part found
+    whole elsewhere (``moved_px``) or extra material of four times the threshold stays decisive.
     """
-    return _not_decisive_where_it_passes(result, shape_args, [(0, 0)])
-
-
-def not_decisive_where_placed_before(result: ShapeResult, shape_args: Mapping[str, Any]) -> ShapeResult:
-    """``result`` with ``decisive`` cleared when the same check passes where this camera's earlier passing checks
-    laid the outline (``shape_args["placed_at"]``), a countable move from where it lies now, else ``result``.
-
-    A part in a colour close to the bed's, with its cast shadow at the foot, gives the alignment little to hold:
-    the outline can walk off the part (s18 ``044_runout`` s2: 12 px at one check, then the part reads
-    "displaced" as it grows). When the outline laid back where the view found the part before fits it with half
-    the threshold to spare (no newest-band failure, nothing decisive), the part stands where it stood; a part
-    that detached or whose newest layers shifted does not (its top, at least, is elsewhere). As
-    :func:`not_decisive_where_calibrated`: the camera still fails, but other cameras must agree.
-    """
-    return _not_decisive_where_it_passes(result, shape_args, shape_args.get("placed_at", ()))
-
-
-def _not_decisive_where_it_passes(result: ShapeResult, shape_args: Mapping[str, Any],
-                                  anchors: Sequence[tuple[int, int]]) -> ShapeResult:
-    """``result`` with ``decisive`` cleared when the check at one of ``anchors`` (each a countable move, the
-    layer-shift limit and at least two tolerances + 1 px, from ``result.shift_px``) passes with half the threshold
-    to spare, no newest-band failure and nothing decisive. A part found whole elsewhere (``moved_px``) or extra
-    material of four times the threshold stays decisive."""
+    anchors = [(0, 0), *(tuple(a) for a in shape_args.get("placed_at", ()))]
     threshold = result.threshold
     if not (result.usable and result.decisive and result.moved_px is None and result.extra_pct < 4.0 * threshold):
         return result
@@ -1833,7 +1815,7 @@ def _not_decisive_where_it_passes(result: ShapeResult, shape_args: Mapping[str, 
     min_move = 2.0 * tol + 1.0
     if regions.px_per_mm > 0:
         min_move = max(float(shape_args.get("layer_shift_mm", 1.5)) * regions.px_per_mm, min_move)
-    for anchor in dict.fromkeys(tuple(a) for a in anchors):
+    for anchor in dict.fromkeys(anchors):
         if np.hypot(result.shift_px[0] - anchor[0], result.shift_px[1] - anchor[1]) < min_move:
             continue
         there = check_shape(**dict(shape_args, anchor=anchor, max_drift=0, keep_pictures=False))

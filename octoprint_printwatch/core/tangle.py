@@ -287,8 +287,9 @@ def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = 
         if not seen:
             return None
         # (as much as a lone camera must see: a brim of the part's colour, new in one view, also lies around it)
+        measured = {**areas, **(with_foot or {})}
         around = sorted(cam for cam, a in seen.items() if cam in surrounding and a >= one_view_mm2
-                        and witnessed_by_another(cam, {**areas, **(with_foot or {})}))
+                        and witnessed_by_another(cam, measured))
         if around:
             slowed = f" on more than half the circle around the part in {', '.join(around)}"
         elif viewpoints({cam: (directions or {}).get(cam) for cam in seen}) < 2:

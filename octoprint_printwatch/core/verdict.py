@@ -85,10 +85,14 @@ def stopped_views_needed(usable: int) -> int:
     return max(1, min(STOPPED_VIEWS, usable))
 
 
+def _rise_readings(result: ShapeResult) -> list[float]:
+    """A view's readings of the rise at this check (% of the expected), finest first: fine, over the span, coarse."""
+    return [x for x in (result.growth_pct, result.span_growth_pct, result.coarse_growth_pct) if x is not None]
+
+
 def finest_reading(result: ShapeResult) -> float | None:
     """A view's finest reading of the rise (% of the expected): fine, else over the span, else coarse; None: none."""
-    return next((x for x in (result.growth_pct, result.span_growth_pct, result.coarse_growth_pct) if x is not None),
-                None)
+    return next(iter(_rise_readings(result)), None)
 
 
 #: A view's reading of a rise at its previous check corroborates a stop (decide's ``held_rise_before``) only
@@ -106,8 +110,7 @@ FULL_RISE_PCT = 100.0
 def rise_read(r: ShapeResult) -> float:
     """A view's highest reading of the rise at this check (% of the expected): fine, over its span or coarse;
     0 (none)."""
-    readings = [x for x in (r.growth_pct, r.span_growth_pct, r.coarse_growth_pct) if x is not None]
-    return float(max(readings, default=0.0))
+    return float(max(_rise_readings(r), default=0.0))
 
 
 def held_rise(readings: Sequence[float], read_at_previous: bool) -> float | None:

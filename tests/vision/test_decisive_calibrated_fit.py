@@ -3,7 +3,7 @@ is not simply standing where the calibration puts it while the outline was ancho
 camouflaged face dragged the anchor; hold-out 4 ``normal_02``)."""
 import pytest
 
-from octoprint_printwatch.core.shape_check import check_shape, not_decisive_where_calibrated
+from octoprint_printwatch.core.shape_check import check_shape, not_decisive_where_it_stood
 
 from .synthetic import PART, bed_texture, camera_effects, paint_part, regions
 
@@ -17,7 +17,7 @@ def run(bed, part, anchor):
     # the anchor is what earlier checks of this camera chose; max_drift=0 keeps the outline there
     args = dict(camera="cam", background=camera_effects(bed, seed=11), frame=camera_effects(paint_part(bed, part)),
                 regions=regions(), anchor=anchor, max_drift=0)
-    return not_decisive_where_calibrated(check_shape(**args), args)
+    return not_decisive_where_it_stood(check_shape(**args), args)
 
 
 def test_an_outline_anchored_off_a_part_that_stands_where_calibrated_is_not_decisive(bed):

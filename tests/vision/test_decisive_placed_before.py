@@ -3,8 +3,7 @@ where this camera's earlier passing checks laid the outline, and the outline wal
 colour close to the bed's, its cast shadow at the foot pulling the alignment; s18 ``044_runout`` s2)."""
 import pytest
 
-from octoprint_printwatch.core.shape_check import (check_shape, not_decisive_where_calibrated,
-                                                   not_decisive_where_placed_before)
+from octoprint_printwatch.core.shape_check import check_shape, not_decisive_where_it_stood
 
 from .synthetic import PART, bed_texture, camera_effects, paint_part, regions
 
@@ -18,7 +17,7 @@ def run(bed, part, anchor, placed_at):
     # the anchor is where the outline lies now (max_drift=0 keeps it there); placed_at, where earlier checks laid it
     args = dict(camera="cam", background=camera_effects(bed, seed=11), frame=camera_effects(paint_part(bed, part)),
                 regions=regions(), anchor=anchor, max_drift=0, placed_at=tuple(placed_at))
-    return not_decisive_where_placed_before(not_decisive_where_calibrated(check_shape(**args), args), args)
+    return not_decisive_where_it_stood(check_shape(**args), args)
 
 
 def test_an_outline_walked_off_a_part_that_stands_where_it_was_placed_before_is_not_decisive(bed):
