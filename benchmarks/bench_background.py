@@ -39,7 +39,8 @@ from octoprint_printwatch.core.pipeline import prepare_job  # noqa: E402
 from octoprint_printwatch.core.recording import load_recording  # noqa: E402
 from octoprint_printwatch.core.render import render_silhouette  # noqa: E402
 from octoprint_printwatch.core.settings import DetectionSettings  # noqa: E402
-from octoprint_printwatch.core.shape_check import bounding_box, clean_mask, material_evidence  # noqa: E402
+from octoprint_printwatch.core.masks import bounding_box  # noqa: E402
+from octoprint_printwatch.core.material import clean_mask, material_evidence  # noqa: E402
 
 
 def rgb_distance_mask(bg, fr, sample, gains=False):

@@ -120,6 +120,14 @@ def around(mask: np.ndarray, box: tuple[int, int, int, int], reach_x: int, reach
     return out
 
 
+def upper_profile(mask: np.ndarray) -> np.ndarray:
+    """(w,) float: row of the top-most True pixel of each column, NaN for empty columns."""
+    has = mask.any(axis=0)
+    top = np.argmax(mask, axis=0).astype(np.float32)
+    top[~has] = np.nan
+    return top
+
+
 def outline_zone(expected: np.ndarray, tolerance: float, top_tolerance: float = 0.0) -> np.ndarray:
     """(h, w) bool: ``expected`` grown by ``tolerance`` px, and upwards (towards row 0) by ``top_tolerance``
     px more (a part's top may stand a little higher in the image than its outline: the vertical alignment

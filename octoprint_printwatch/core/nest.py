@@ -4,7 +4,7 @@ how textured it looks.
 A print that failed into spaghetti stops growing while its strands pile up over the top: the outline of
 the pile can rise and fill the expected silhouette, but the newest band is then a mesh of 0.4 mm strands
 with the bed showing through, or the bed itself. Unmixing each pixel between the background and the
-part's colours (:func:`core.shape_check.coverage_by_part`) reads how much of it the part's material
+part's colours (:func:`core.material.coverage_by_part`) reads how much of it the part's material
 covers: about 1 on a solid face, about 0.5 where a strand covers half a pixel, 0 on the bare bed. The
 figure is a physical share, not a level in noise units, so it stays meaningful where the noise estimate
 is inflated (a parked hotend that left the background frame's bed sample).
@@ -20,6 +20,7 @@ from typing import Mapping
 
 import numpy as np
 
+from .material import coverage_by_part
 from .tangle import SLOWED_RISE_PCT
 
 #: A stalled part's newest band covered less than this share by the part's material is a nest or the bed
@@ -61,8 +62,6 @@ def part_coverage(frame: np.ndarray, background: np.ndarray, region: np.ndarray,
     (h, w) bool, ``palette`` (k, 3) the part's colours. Each pixel's coverage is clipped to 1 before
     averaging (a pixel beyond the palette's colour is no more than covered).
     """
-    from .shape_check import coverage_by_part   # (shape_check imports this module)
-
     if palette is None:
         return None
     ys, xs = np.nonzero(region)

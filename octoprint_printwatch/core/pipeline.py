@@ -23,9 +23,10 @@ import numpy as np
 from .camera import Camera
 from .errors import PrintWatchError
 from .settings import DetectionSettings
+from .alignment import near_any
+from .growth import GROWTH_SPAN_CHECKS
 from .layer_shift import LayerShift, onto_earlier_places
-from .shape_check import (GROWTH_SPAN_CHECKS, ExpectedRegions, ShapeResult, check_shape,
-                          near_any, not_decisive_where_it_stood)
+from .shape_check import ExpectedRegions, ShapeResult, check_shape, not_decisive_where_it_stood
 from .nest import SOLID_MIN_COVERAGE, STALL_READ_BELOW_GROWTH_PCT
 from .verdict import (RISE_HELD_READINGS, band_shifts_of, decide, finest_reading, held_rise, layer_shift_of,
                       lowest_missing_while_rising, missing_since_rise)

@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 
 from octoprint_printwatch.core.masks import dilate, erode
-from octoprint_printwatch.core.shape_check import edges_by_side, outline_on_edges
+from octoprint_printwatch.core.alignment import edges_by_side, outline_on_edges
 
 from .synthetic import Box
 

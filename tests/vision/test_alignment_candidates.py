@@ -8,7 +8,7 @@ import numpy as np
 
 from octoprint_printwatch.core.pipeline import CheckRunner, _still_in_place
 from octoprint_printwatch.core.settings import DetectionSettings
-from octoprint_printwatch.core.shape_check import align_candidates, align_expected
+from octoprint_printwatch.core.alignment import align_candidates, align_expected
 
 from .synthetic import Box
 from .test_pipeline import HEIGHTS, bed, cams, frame, make_plan  # noqa: F401  (cams is a fixture)

@@ -10,7 +10,8 @@ import pytest
 
 from octoprint_printwatch.core.verdict import decide
 from octoprint_printwatch.core.settings import DetectionSettings
-from octoprint_printwatch.core.shape_check import ShapeResult, check_shape, differs_as_a_group, material_evidence
+from octoprint_printwatch.core.shape_check import ShapeResult, check_shape
+from octoprint_printwatch.core.material import differs_as_a_group, material_evidence
 
 from .synthetic import H, W, Box, bed_texture, camera_effects, paint_part, regions
 

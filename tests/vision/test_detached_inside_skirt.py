@@ -8,7 +8,8 @@ missing. A hole now stays filled only if material within the aligned outline clo
 """
 import numpy as np
 
-from octoprint_printwatch.core.shape_check import check_shape, clean_mask, enclosed
+from octoprint_printwatch.core.shape_check import check_shape
+from octoprint_printwatch.core.material import clean_mask, enclosed
 
 from .synthetic import Box, bed_texture, camera_effects, regions
 

@@ -11,7 +11,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from octoprint_printwatch.core.shape_check import check_shape, near_any
+from octoprint_printwatch.core.shape_check import check_shape
+from octoprint_printwatch.core.alignment import near_any
 
 from .synthetic import PART, bed_texture, camera_effects, paint_part, regions
 

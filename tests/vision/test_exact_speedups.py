@@ -6,8 +6,8 @@ import numpy as np
 from octoprint_printwatch.core import shadows
 from octoprint_printwatch.core.layer_shift import _Evidence, _vertical_null, stretched
 from octoprint_printwatch.core.masks import bounding_box
-from octoprint_printwatch.core.shape_check import (
-    _hypot, _luma_chroma, _zero_where, compare_masks, material_evidence, part_palette)
+from octoprint_printwatch.core.material import _hypot, _luma_chroma, _zero_where, material_evidence, part_palette
+from octoprint_printwatch.core.shape_check import compare_masks
 from octoprint_printwatch.core.tangle import new_material
 
 
@@ -266,7 +266,7 @@ def test_new_material_with_compare_masks_objects_from_above_is_new_material_alon
 def test_scaled_background_is_np_multiply():
     """_scaled (a per-channel lookup table) == np.multiply(image, gains, dtype=float32), bit for bit, on uint8
     crops (views too) with float32 or float64 gains; other images are multiplied as before."""
-    from octoprint_printwatch.core.shape_check import _scaled
+    from octoprint_printwatch.core.material import _scaled
     rng = np.random.default_rng(21)
     for trial in range(60):
         image = rng.integers(0, 256, (int(rng.integers(5, 90)), int(rng.integers(5, 90)), 3)).astype(np.uint8)
@@ -375,7 +375,7 @@ def test_clipped_bed_test_without_a_clipped_channel_finds_nothing():
 def test_edge_noise_is_read_only_where_a_column_fails_the_share_test():
     """edge_in_the_frame with the bed sample: the columns of the share test alone plus those clear of the
     noise; where the share test passes every column, the sample changes nothing (it is then not read)."""
-    from octoprint_printwatch.core.shape_check import edge_in_the_frame
+    from octoprint_printwatch.core.growth import edge_in_the_frame
     rng = np.random.default_rng(25)
     both_kinds = set()
     for trial in range(150):

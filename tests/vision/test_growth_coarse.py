@@ -3,7 +3,8 @@ import numpy as np
 
 from octoprint_printwatch.core.verdict import decide
 from octoprint_printwatch.core.settings import DetectionSettings
-from octoprint_printwatch.core.shape_check import COARSE_RISE_FACTOR, ShapeResult, profile_growth
+from octoprint_printwatch.core.growth import COARSE_RISE_FACTOR, profile_growth
+from octoprint_printwatch.core.shape_check import ShapeResult
 
 
 def box(top, h=80, w=60, left=10, right=50, bottom=70):

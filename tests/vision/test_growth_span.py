@@ -7,7 +7,8 @@ import pytest
 from octoprint_printwatch.core.pipeline import CameraState
 from octoprint_printwatch.core.verdict import decide
 from octoprint_printwatch.core.settings import DetectionSettings
-from octoprint_printwatch.core.shape_check import GROWTH_SPAN_CHECKS, ShapeResult, check_shape
+from octoprint_printwatch.core.growth import GROWTH_SPAN_CHECKS
+from octoprint_printwatch.core.shape_check import ShapeResult, check_shape
 
 from .synthetic import Box, bed_texture, camera_effects, paint_part, regions
 

@@ -10,7 +10,7 @@ the bed beside it, over about a quarter of the sample.
 import numpy as np
 import pytest
 
-from octoprint_printwatch.core.shape_check import material_evidence, part_palette, took_the_part_colour
+from octoprint_printwatch.core.material import material_evidence, part_palette, took_the_part_colour
 
 from .synthetic import PART, Box, bed_texture, camera_effects, paint_part
 

@@ -1,7 +1,7 @@
 """The outline match that breaks the alignment's ties (shape_check.outline_candidate) on masks with a known answer."""
 import numpy as np
 
-from octoprint_printwatch.core.shape_check import outline_candidate
+from octoprint_printwatch.core.alignment import outline_candidate
 
 
 def block(h=60, w=80, top=20, bottom=40, left=30, right=50):

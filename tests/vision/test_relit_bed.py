@@ -15,7 +15,8 @@ import numpy as np
 from octoprint_printwatch.core.pipeline import CheckRunner
 from octoprint_printwatch.core.verdict import band_shifts_of, decide
 from octoprint_printwatch.core.settings import DetectionSettings
-from octoprint_printwatch.core.shape_check import ShapeResult, bed_light_change, check_shape
+from octoprint_printwatch.core.shape_check import ShapeResult, check_shape
+from octoprint_printwatch.core.material import bed_light_change
 from octoprint_printwatch.core.tangle import NewMaterial
 
 from .synthetic import PART, Box, H, W, bed_texture, camera_effects, paint_part, regions

@@ -9,7 +9,8 @@ import cv2
 import numpy as np
 import pytest
 
-from octoprint_printwatch.core.shape_check import _luma_chroma, check_shape, coverage_by_part, material_evidence
+from octoprint_printwatch.core.material import _luma_chroma, coverage_by_part, material_evidence
+from octoprint_printwatch.core.shape_check import check_shape
 
 from .synthetic import PART, Box, bed_texture, camera_effects, darken, paint_part, regions
 

@@ -2,9 +2,10 @@
 import numpy as np
 import pytest
 
-from octoprint_printwatch.core.shape_check import (
-    align_expected, check_shape, compare_masks, material_evidence, shift_mask,
-)
+from octoprint_printwatch.core.alignment import align_expected
+from octoprint_printwatch.core.shape_check import check_shape, compare_masks
+from octoprint_printwatch.core.material import material_evidence
+from octoprint_printwatch.core.masks import shift_mask
 
 from .synthetic import PART, W, Box, bed_texture, camera_effects, darken, paint_part, regions
 
@@ -199,7 +200,7 @@ def test_overlay_paints_missing_red_and_extra_magenta(bed):
 
 # ------------------------------------------------------- newest band and growth
 def test_profile_growth_is_full_for_a_growing_part_and_nil_for_a_stalled_one():
-    from octoprint_printwatch.core.shape_check import profile_growth
+    from octoprint_printwatch.core.growth import profile_growth
 
     before, now = Box(110, 110, 210, 170).mask(), PART.mask()     # the model rises by 30 rows
     assert profile_growth(now, before, now, before) == pytest.approx(100)
@@ -210,7 +211,7 @@ def test_profile_growth_is_full_for_a_growing_part_and_nil_for_a_stalled_one():
 
 
 def test_a_part_the_colour_of_its_background_is_not_declared_missing(bed):
-    from octoprint_printwatch.core.shape_check import detectable_fraction
+    from octoprint_printwatch.core.material import detectable_fraction
 
     noise = {"chroma": 2.0, "bright": 3.0, "dark": 3.0}
     palette = np.array([[30, 30, 32], [40, 40, 42]], np.float32)              # a black part
@@ -227,7 +228,7 @@ def test_a_part_the_colour_of_its_background_is_not_declared_missing(bed):
 
 
 def test_displaced_part_finds_a_moved_part_but_not_a_brim():
-    from octoprint_printwatch.core.shape_check import displaced_part
+    from octoprint_printwatch.core.alignment import displaced_part
 
     expected = np.zeros((200, 300), bool)
     expected[80:130, 100:160] = True
@@ -266,7 +267,7 @@ def test_a_part_standing_a_little_taller_than_its_outline_is_not_extra_material(
 def test_missing_is_claimed_only_where_most_of_the_parts_shades_would_show(bed):
     # A part whose top faces look like the bed (a dark part on a dark bed seen from above) is not
     # "missing" where the camera sees bed colour: those shades may be the part itself.
-    from octoprint_printwatch.core.shape_check import detectable_fraction
+    from octoprint_printwatch.core.material import detectable_fraction
 
     noise = {"chroma": 2.0, "bright": 3.0, "dark": 3.0}
     bed_colour = np.array([[150, 120, 60]], np.float32)

@@ -973,7 +973,7 @@ def foreground_mask(background: np.ndarray, frame: np.ndarray, prior: np.ndarray
 
     ``prior`` is where the part may be; the bed around it is the noise reference.
     """
-    from ..shape_check import clean_mask, material_evidence
+    from ..material import clean_mask, material_evidence
 
     if background.shape != frame.shape:
         background = cv2.resize(background, (frame.shape[1], frame.shape[0]), interpolation=cv2.INTER_AREA)
