@@ -25,7 +25,7 @@ from .errors import PrintWatchError
 from .settings import DetectionSettings
 from .alignment import near_any
 from .growth import GROWTH_SPAN_CHECKS
-from .layer_shift import LayerShift, onto_earlier_places
+from .layer_shift import LayerShift
 from .shape_check import ExpectedRegions, ShapeResult, check_shape, not_decisive_where_it_stood
 from .nest import SOLID_MIN_COVERAGE, STALL_READ_BELOW_GROWTH_PCT
 from .verdict import (RISE_HELD_READINGS, band_shifts_of, decide, finest_reading, held_rise, layer_shift_of,
@@ -671,11 +671,8 @@ class CheckRunner:
         shape_cpu_seconds = time.process_time() - cpu_started
         size = self._size_check(z, frames, shape)
         band_shifts = band_shifts_of(shape)
-        layer_shift = layer_shift_of(shape, self.band_shift_history, band_shifts)
-        if layer_shift is not None:
-            # (a band read back where a camera's first checks laid its outline: the outline walked, not the layers)
-            outlines = {name: (view.aligned_at, self.cameras[name].placed_at) for name, view in band_shifts.items()}
-            layer_shift.onto_earlier_places = onto_earlier_places(layer_shift, outlines)
+        layer_shift = layer_shift_of(shape, self.band_shift_history, band_shifts,
+                                     placed_at={name: state.placed_at for name, state in self.cameras.items()})
         self.band_shift_history = [*self.band_shift_history, (self.previous_z is not None, band_shifts)][-4:]
         top_closing = self.plan.top_closing(z)
         # kept for a re-decision on other evidence (bench_detection's shape-only verdict: size={})

@@ -12,7 +12,7 @@ import numpy as np
 
 from .settings import DetectionSettings
 from .layer_shift import (BandShift, LayerShift, confirms_layer_shift, describe_layer_shift, estimate_layer_shift,
-                          with_history)
+                          onto_earlier_places, with_history)
 from .shape_check import ShapeResult
 from .nest import NEST_MAX_COVERAGE, SOLID_MIN_COVERAGE, texture_jump_for, textured_views
 from .tangle import loose_material
@@ -34,19 +34,26 @@ def band_shifts_of(shape: Mapping[str, ShapeResult]) -> dict[str, BandShift]:
 
 def layer_shift_of(shape: Mapping[str, ShapeResult],
                    history: Sequence[tuple[bool, Mapping[str, BandShift]]] = (),
-                   band_shifts: Mapping[str, BandShift] | None = None) -> LayerShift | None:
+                   band_shifts: Mapping[str, BandShift] | None = None,
+                   placed_at: Mapping[str, Sequence[tuple[int, int]]] | None = None) -> LayerShift | None:
     """The bed shift of the newest layers that the usable cameras confirm together (or None).
 
     ``history``: (had a check before it, band_shifts_of) of the previous checks, oldest first: the evidence
     for the same shift at those checks (``core.layer_shift.with_history``). ``band_shifts``: this check's
-    ``band_shifts_of(shape)`` when the caller has it already.
+    ``band_shifts_of(shape)`` when the caller has it already. ``placed_at``: {camera: the (dx, dy) px its
+    earlier passing checks laid the outline at}: a band read back onto them is the outline's walk, not the
+    layers' (``LayerShift.onto_earlier_places``); None: not known.
     """
+    views = band_shifts_of(shape) if band_shifts is None else band_shifts
     recent = list(history)[-4:]
-    earlier = [views for tested, views in recent if tested and views]
+    earlier = [looks for tested, looks in recent if tested and looks]
     # (the print's first check, while among them: its band is the whole part, its top the part's height)
-    first = next((views for tested, views in recent if not tested and views), None)
-    return with_history(estimate_layer_shift(band_shifts_of(shape) if band_shifts is None else band_shifts,
-                                             earlier=earlier, first=first), history)
+    first = next((looks for tested, looks in recent if not tested and looks), None)
+    shift = with_history(estimate_layer_shift(views, earlier=earlier, first=first), history)
+    if shift is not None and placed_at is not None:
+        shift.onto_earlier_places = onto_earlier_places(
+            shift, {name: (view.aligned_at, placed_at.get(name, ())) for name, view in views.items()})
+    return shift
 
 
 def unseen_by_partner(result: ShapeResult, usable: Mapping[str, ShapeResult], pairs: Sequence[Sequence[str]],

@@ -43,3 +43,13 @@ def test_a_band_moved_back_onto_an_earlier_outline_is_the_outline_walking():
     found.onto_earlier_places = True
     assert not confirms_layer_shift(found, 1.5)
     assert found.figures()["onto_earlier_places"] is True
+
+
+def test_the_pooled_shift_reads_the_walk_from_each_cameras_earlier_places():
+    in_place = view(BEFORE | BAND)
+    history = [(False, in_place), (True, in_place), (True, in_place)]
+    now = view(BEFORE | frustum(80, 140, 30, dx=8))
+    walked = layer_shift_of({}, history, now, placed_at={"cam": [(8, 0), (6, 0), (4, 0), (2, 0), (0, 0)]})
+    assert walked.onto_earlier_places and not confirms_layer_shift(walked, 1.5)
+    stood_still = layer_shift_of({}, history, now, placed_at={"cam": [(0, 0)]})
+    assert not stood_still.onto_earlier_places and confirms_layer_shift(stood_still, 1.5)
