@@ -69,3 +69,13 @@ def test_a_width_from_the_outline_still_counts_where_no_side_stood_on_flat_mater
     result = _check(scene).measure(*wide, 14.0)
     assert result.failed and result.width_mm == pytest.approx(27.0, rel=0.08), result.to_dict()
     assert np.isfinite(result.error_pct) and "outline and the matched points" in result.reason
+
+
+def test_nothing_matched_where_one_view_sees_the_top_at_the_height_is_no_verdict(scene, top_rows_unmatched):
+    # The right view loses the part's upper rows (its top against a backdrop of its own colour): its upper edge
+    # stands low, the left view's stands at the current height and fits the model's. A print that stopped shows
+    # a low top in both views; one view cannot see a top edge that is not there.
+    left_full, right_short = scene["full"][0], scene["short"][1]
+    result = _check(scene).measure(left_full, right_short, 14.0)
+    assert not result.failed, result.to_dict()
+    assert "one view's upper edge stands at it" in result.reason, result.reason

@@ -480,6 +480,17 @@ class PairSizeCheck:
             notes.append("nothing reconstructed at the current height, not held: both views' upper edges stand "
                          "at it (" + ", ".join(f"{p.height_mm:.1f}" for p in planes) + " mm): the stereo match "
                          "failed, not the print")
+        if seed_rule and _a_view_sees_the_top(heights, z_top, tol_z):
+            # One camera's upper edge fits the model's across the columns at the current height: the part is
+            # there. A view can lose a top it cannot tell from what lies behind it (black filament against a
+            # dark backdrop) and read it low, but no view finds a top edge, shaped as the model's, where there
+            # is none; a print that stopped shows a low top in both views. (A black frame on glass paused a
+            # normal print on cross-check seed 21: one view's top at 33-45 mm as printed, the other's stuck at
+            # 28-34.) A height measured still counts: the two disagreeing give none.
+            seed_rule = False
+            notes.append("nothing reconstructed at the current height, not held: one view's upper edge stands at "
+                         "it (" + ", ".join("-" if h is None else f"{h:.1f}" for h in heights) + " mm, fitting "
+                         "the model's): the other view does not see the top, the part is there")
         if seed_rule and model_outline_in_band is not None:
             expected_points = model_outline_in_band()
             diag["model_outline_in_band"] = expected_points
@@ -858,6 +869,12 @@ class PairSizeCheck:
             result.abstained = not terms
         result.seconds = time.perf_counter() - started
         return result
+
+
+def _a_view_sees_the_top(heights, z_top: float, tol_z: float) -> bool:
+    """Whether a camera's upper-edge height, kept only where the edge fits the model's across the columns
+    (None elsewhere), puts the part's top within ``tol_z`` (what the pair's calibration explains) of ``z_top``."""
+    return any(h is not None and h >= z_top - tol_z for h in heights)
 
 
 def _edges_reach(planes, z_top: float, tol_z: float) -> bool:
