@@ -14,7 +14,8 @@ from .settings import DetectionSettings
 from .layer_shift import (BandShift, LayerShift, confirms_layer_shift, describe_layer_shift, estimate_layer_shift,
                           with_history)
 from .shape_check import ShapeResult
-from .nest import NEST_MAX_COVERAGE, SOLID_MIN_COVERAGE, texture_jump_for, textured_views
+from .nest import (NEST_MAX_COVERAGE, PART_SLOWED_SOMEWHAT_PCT, SOLID_MIN_COVERAGE, TEXTURE_JUMP_STRONG,
+                   texture_jump_for, textured_views)
 from .tangle import loose_material
 
 
@@ -208,6 +209,26 @@ def rise_for_loose_material(usable: Mapping[str, ShapeResult], growth: Sequence[
     if len(readings) >= 2 or (readings and len(usable) == 1):
         return float(np.median(readings))
     return None
+
+
+def stopped_and_textured(usable: Mapping[str, ShapeResult], settings: DetectionSettings, *,
+                         held_rise_before: Mapping[str, float] | None,
+                         band_texture_before: Mapping[str, float] | None) -> dict[str, float]:
+    """The views that stopped (a rise held at their previous readings, ``held_rise_before``, and none read now: their
+    finest reading under ``min_growth_pct``) while their newest band turned :data:`TEXTURE_JUMP_STRONG` times as
+    textured as at their previous check (``band_texture_before``), with that ratio; none where the median of every
+    view's finest reading is :data:`PART_SLOWED_SOMEWHAT_PCT` or more. Strands piled over a part that stopped read
+    in that view as both a stop and a changed band, where no median of one-check readings exists to slow (views
+    seen small read the rise only over a span or to the pixel; a span reaching back before the stop still reads
+    part of the rise). A view that never saw the part rise, or one reading some rise, is no such witness."""
+    readings = {cam: reading for cam, r in usable.items()
+                if (reading := finest_reading(r)) is not None and reading >= -15.0}
+    if not readings or float(np.median(list(readings.values()))) >= PART_SLOWED_SOMEWHAT_PCT:
+        return {}
+    stopped = {cam for cam, reading in readings.items() if reading < settings.min_growth_pct
+               and ((held_rise_before or {}).get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT}
+    return textured_views({cam: usable[cam].band_texture for cam in stopped}, band_texture_before or {},
+                          TEXTURE_JUMP_STRONG)
 
 
 @dataclass(frozen=True)
@@ -440,6 +461,10 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       (``ShapeResult.band_texture``; ``band_texture_before``: each camera's reading at its previous check, not a
       first look; :func:`core.nest.textured_views`), or twice as textured (TEXTURE_JUMP_STRONG) with the part rising
       under 80 % (PART_SLOWED_SOMEWHAT_PCT): strands piled over a part that slowed, or the bed where it should be;
+      or, not where a top surface closes, when a view that held a rise (``held_rise_before``) and reads none now (its
+      finest reading) shows its band twice as textured, while the median of every view's finest reading is under
+      80 % (:func:`stopped_and_textured`: its own stop is the second witness where no median of one-check readings
+      exists);
     * unknown when no camera and no pair gave usable evidence; ok otherwise.
     """
     if layer_shift is None:
@@ -566,6 +591,16 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
         fail_reasons.extend(f"{cam}: the newest layers look {ratio:.1f} times as textured as at the previous check "
                             f"while the part rose {rise_pct:.0f}% of the expected height: strands piled over the "
                             f"part, or the bed where it should be?" for cam, ratio in sorted(textured.items()))
+        shape_fail = True
+    # ... and a view that read the part rise at its checks before and none now whose band turned so textured: its own
+    # stop is the second witness where too few views read the rise since the previous check (stopped_and_textured)
+    stopped_textured = ({} if textured or top_closing else
+                        stopped_and_textured(usable, settings, held_rise_before=held_rise_before,
+                                             band_texture_before=band_texture_before))
+    if stopped_textured:
+        fail_reasons.extend(f"{cam}: the newest layers look {ratio:.1f} times as textured as at the previous check "
+                            f"where the part stopped rising in this view: strands piled over the part, or the bed "
+                            f"where it should be?" for cam, ratio in sorted(stopped_textured.items()))
         shape_fail = True
     if shape_fail or size_fail or stalled:
         return "fail", fail_reasons + size_fail + reasons
