@@ -231,6 +231,31 @@ def stopped_and_textured(usable: Mapping[str, ShapeResult], settings: DetectionS
                           TEXTURE_JUMP_STRONG)
 
 
+#: A view whose outline sank by at least this share of a check's expected rise (its finest reading, % : -50 is half a
+#: check's layers gone from its top) saw the part go down, not stop: material does not vanish (knocked_over)
+SUNK_PCT = -50.0
+#: ... where one of two such views misses this many times its threshold of the part (as the decisive extra material)
+KNOCKED_MISSING_THRESHOLDS = 4.0
+
+
+def knocked_over(usable: Mapping[str, ShapeResult]) -> str | None:
+    """The reason to pause for a part knocked over or off its place, or None: two views (not relit) whose outline
+    sank (finest reading :data:`SUNK_PCT` or lower) at the same check, one of them missing
+    :data:`KNOCKED_MISSING_THRESHOLDS` times its threshold of the part. A part that moved away misses where it stood,
+    and where it lies in a view the outline's search does not reach, or another view cannot tell it from the bed,
+    nothing reads extra beside the gap (the decisive signature needs both). One view's outline sinks where a top
+    face in the colour of what lies behind it comes and goes (the stall rules leave such readings out), and a view
+    can miss most of a part it cannot see, but two sunk outlines at once with most of the part gone are a fall."""
+    sunk = {cam: r for cam, r in usable.items()
+            if not r.relit and (reading := finest_reading(r)) is not None and reading <= SUNK_PCT}
+    gone = [r for r in sunk.values() if r.missing_pct >= KNOCKED_MISSING_THRESHOLDS * r.threshold]
+    if len(sunk) < 2 or not gone:
+        return None
+    worst = max(gone, key=lambda r: r.missing_pct)
+    return (f"the part's outline sank in {', '.join(sorted(sunk))} since the previous check while {worst.camera} "
+            f"misses {worst.missing_pct:.0f}% of the part: the part knocked over or off its place?")
+
+
 @dataclass(frozen=True)
 class Stall:
     """Whether the part stopped growing at a check (:func:`part_stalled`)."""
@@ -445,6 +470,9 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       the newest band, in one of them),
       or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
       abstains reports no ``error_pct`` and never fails);
+    * or when two views (not relit) read their outline sunk by half a check's rise or more and one of them misses four
+      times its threshold of the part (:func:`knocked_over`: a part knocked over or off its place, lying where no
+      view reads it as extra material);
     * or when the cameras together confirm that the newest layers sit sideways on the older ones
       (``layer_shift``: :func:`layer_shift_of`, computed here when not given; see
       :func:`core.layer_shift.confirms_layer_shift`);
@@ -558,6 +586,10 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
                                 f"strands or bare bed where the part should be" for r in bare_band)
     if layer_shift is not None and confirms_layer_shift(layer_shift, settings.layer_shift_mm):
         fail_reasons.append(describe_layer_shift(layer_shift))
+        shape_fail = True
+    fallen = None if shape_fail or stalled else knocked_over(usable)
+    if fallen is not None:
+        fail_reasons.append(fallen)
         shape_fail = True
     # The rise the loose-material rule weighs: the median of the fine readings (two or more views, or a one-camera
     # rig's own); where they are too few (a part seen small: a rise of 4-6 px per check), each view's fine reading
