@@ -14,7 +14,8 @@ from .settings import DetectionSettings
 from .layer_shift import (BandShift, LayerShift, confirms_layer_shift, describe_layer_shift, estimate_layer_shift,
                           onto_earlier_places, with_history)
 from .shape_check import ShapeResult
-from .nest import NEST_MAX_COVERAGE, SOLID_MIN_COVERAGE, texture_jump_for, textured_views
+from .nest import (NEST_MAX_COVERAGE, PART_SLOWED_SOMEWHAT_PCT, SOLID_MIN_COVERAGE, TEXTURE_JUMP_STRONG,
+                   texture_jump_for, textured_views)
 from .tangle import loose_material
 
 
@@ -215,6 +216,51 @@ def rise_for_loose_material(usable: Mapping[str, ShapeResult], growth: Sequence[
     if len(readings) >= 2 or (readings and len(usable) == 1):
         return float(np.median(readings))
     return None
+
+
+def stopped_and_textured(usable: Mapping[str, ShapeResult], settings: DetectionSettings, *,
+                         held_rise_before: Mapping[str, float] | None,
+                         band_texture_before: Mapping[str, float] | None) -> dict[str, float]:
+    """The views that stopped (a rise held at their previous readings, ``held_rise_before``, and none read now: their
+    finest reading under ``min_growth_pct``) while their newest band turned :data:`TEXTURE_JUMP_STRONG` times as
+    textured as at their previous check (``band_texture_before``), with that ratio; none where the median of every
+    view's finest reading is :data:`PART_SLOWED_SOMEWHAT_PCT` or more. Strands piled over a part that stopped read
+    in that view as both a stop and a changed band, where no median of one-check readings exists to slow (views
+    seen small read the rise only over a span or to the pixel; a span reaching back before the stop still reads
+    part of the rise). A view that never saw the part rise, or one reading some rise, is no such witness."""
+    readings = {cam: reading for cam, r in usable.items()
+                if (reading := finest_reading(r)) is not None and reading >= -15.0}
+    if not readings or float(np.median(list(readings.values()))) >= PART_SLOWED_SOMEWHAT_PCT:
+        return {}
+    stopped = {cam for cam, reading in readings.items() if reading < settings.min_growth_pct
+               and ((held_rise_before or {}).get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT}
+    return textured_views({cam: usable[cam].band_texture for cam in stopped}, band_texture_before or {},
+                          TEXTURE_JUMP_STRONG)
+
+
+#: A view whose outline sank by at least this share of a check's expected rise (its finest reading, % : -50 is half a
+#: check's layers gone from its top) saw the part go down, not stop: material does not vanish (knocked_over)
+SUNK_PCT = -50.0
+#: ... where one of two such views misses this many times its threshold of the part (as the decisive extra material)
+KNOCKED_MISSING_THRESHOLDS = 4.0
+
+
+def knocked_over(usable: Mapping[str, ShapeResult]) -> str | None:
+    """The reason to pause for a part knocked over or off its place, or None: two views (not relit) whose outline
+    sank (finest reading :data:`SUNK_PCT` or lower) at the same check, one of them missing
+    :data:`KNOCKED_MISSING_THRESHOLDS` times its threshold of the part. A part that moved away misses where it stood,
+    and where it lies in a view the outline's search does not reach, or another view cannot tell it from the bed,
+    nothing reads extra beside the gap (the decisive signature needs both). One view's outline sinks where a top
+    face in the colour of what lies behind it comes and goes (the stall rules leave such readings out), and a view
+    can miss most of a part it cannot see, but two sunk outlines at once with most of the part gone are a fall."""
+    sunk = {cam: r for cam, r in usable.items()
+            if not r.relit and (reading := finest_reading(r)) is not None and reading <= SUNK_PCT}
+    gone = [r for r in sunk.values() if r.missing_pct >= KNOCKED_MISSING_THRESHOLDS * r.threshold]
+    if len(sunk) < 2 or not gone:
+        return None
+    worst = max(gone, key=lambda r: r.missing_pct)
+    return (f"the part's outline sank in {', '.join(sorted(sunk))} since the previous check while {worst.camera} "
+            f"misses {worst.missing_pct:.0f}% of the part: the part knocked over or off its place?")
 
 
 @dataclass(frozen=True)
@@ -431,6 +477,9 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       the newest band, in one of them),
       or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
       abstains reports no ``error_pct`` and never fails);
+    * or when two views (not relit) read their outline sunk by half a check's rise or more and one of them misses four
+      times its threshold of the part (:func:`knocked_over`: a part knocked over or off its place, lying where no
+      view reads it as extra material);
     * or when the cameras together confirm that the newest layers sit sideways on the older ones
       (``layer_shift``: :func:`layer_shift_of`, computed here when not given; see
       :func:`core.layer_shift.confirms_layer_shift`);
@@ -447,6 +496,10 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       (``ShapeResult.band_texture``; ``band_texture_before``: each camera's reading at its previous check, not a
       first look; :func:`core.nest.textured_views`), or twice as textured (TEXTURE_JUMP_STRONG) with the part rising
       under 80 % (PART_SLOWED_SOMEWHAT_PCT): strands piled over a part that slowed, or the bed where it should be;
+      or, not where a top surface closes, when a view that held a rise (``held_rise_before``) and reads none now (its
+      finest reading) shows its band twice as textured, while the median of every view's finest reading is under
+      80 % (:func:`stopped_and_textured`: its own stop is the second witness where no median of one-check readings
+      exists);
     * unknown when no camera and no pair gave usable evidence; ok otherwise.
     """
     if layer_shift is None:
@@ -541,6 +594,10 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     if layer_shift is not None and confirms_layer_shift(layer_shift, settings.layer_shift_mm):
         fail_reasons.append(describe_layer_shift(layer_shift))
         shape_fail = True
+    fallen = None if shape_fail or stalled else knocked_over(usable)
+    if fallen is not None:
+        fail_reasons.append(fallen)
+        shape_fail = True
     # The rise the loose-material rule weighs: the median of the fine readings (two or more views, or a one-camera
     # rig's own); where they are too few (a part seen small: a rise of 4-6 px per check), each view's fine reading
     # or else its coarse one (``coarse_growth_pct``, +-25 %) stands in (rise_for_loose_material)
@@ -573,6 +630,16 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
         fail_reasons.extend(f"{cam}: the newest layers look {ratio:.1f} times as textured as at the previous check "
                             f"while the part rose {rise_pct:.0f}% of the expected height: strands piled over the "
                             f"part, or the bed where it should be?" for cam, ratio in sorted(textured.items()))
+        shape_fail = True
+    # ... and a view that read the part rise at its checks before and none now whose band turned so textured: its own
+    # stop is the second witness where too few views read the rise since the previous check (stopped_and_textured)
+    stopped_textured = ({} if textured or top_closing else
+                        stopped_and_textured(usable, settings, held_rise_before=held_rise_before,
+                                             band_texture_before=band_texture_before))
+    if stopped_textured:
+        fail_reasons.extend(f"{cam}: the newest layers look {ratio:.1f} times as textured as at the previous check "
+                            f"where the part stopped rising in this view: strands piled over the part, or the bed "
+                            f"where it should be?" for cam, ratio in sorted(stopped_textured.items()))
         shape_fail = True
     if shape_fail or size_fail or stalled:
         return "fail", fail_reasons + size_fail + reasons
