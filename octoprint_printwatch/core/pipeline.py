@@ -25,7 +25,7 @@ from .errors import PrintWatchError
 from .settings import DetectionSettings
 from .alignment import near_any
 from .growth import GROWTH_SPAN_CHECKS
-from .layer_shift import LayerShift
+from .layer_shift import SHIFT_MIN_SUPPORT_PX, BandShift, LayerShift
 from .shape_check import ExpectedRegions, ShapeResult, check_shape, not_decisive_where_it_stood
 from .nest import SOLID_MIN_COVERAGE, STALL_READ_BELOW_GROWTH_PCT
 from .verdict import (RISE_HELD_READINGS, band_shifts_of, decide, finest_reading, held_rise, layer_shift_of,
@@ -512,6 +512,28 @@ class CameraState:
     #: a first look's tie-break the outline contradicts (CheckRunner._second_look)
     first_look_outline: tuple[int, int] | None = None
 
+    def placed(self, result: ShapeResult, max_drift: int, tall: bool) -> None:
+        """Learn where a passing check (``result``, searched ``max_drift`` px from the anchor) laid the outline;
+        ``tall``: the part is tall enough in this view for an unambiguous alignment.
+
+        A view whose anchor would follow its newest band's shift (:func:`follows_the_shifted_top`) keeps it: the
+        older part it aligns on holds the shifted layers from the next check on, and an outline moved onto them
+        would sit on the shifted top (the layers below would then read beside it, the next band in place, and the
+        view contradict the shift)."""
+        if result.shift_px not in self.placed_at:
+            self.placed_at.append(result.shift_px)
+        if result.shift_candidates is not None and len(result.shift_candidates):
+            self.shift_candidates = result.shift_candidates
+        # Calibration error does not change during a print: once the part is tall enough in this view for the
+        # alignment to be unambiguous, later checks stay near that shift (and a runout cannot walk the expected
+        # outline down, check by check).
+        if not self.frozen:
+            anchor = agreeing_anchor(result.shift_px, result.shift_candidates, max_drift)
+            if follows_the_shifted_top(self.anchor, anchor, result):
+                return
+            self.anchor = anchor
+            self.frozen = tall
+
     def saw(self, mask: np.ndarray | None, z: float) -> None:
         """Remember ``mask`` as the camera's look at ``z`` (its latest usable check)."""
         if self.last_observed is not None and self.last_observed_z is not None and self.last_observed_z != z:
@@ -522,6 +544,10 @@ class CameraState:
 
 #: A first look's chosen shift and its upper-outline match disagree beyond this many pixels (either axis)
 OUTLINE_DISAGREES_PX = 2
+# a view's newest band read shifted by at least this share of the pixels the shift changes (BandShift.confirmed) ...
+BAND_SHIFTED_SHARE = 0.5
+# ... on a part that rose by at least this share of the expected rise (ShapeResult.growth_pct)
+TOP_ROSE_PCT = 50.0
 
 
 def _among(shift: tuple[int, int], candidates: np.ndarray | None) -> bool:
@@ -638,18 +664,10 @@ class CheckRunner:
             places = result.usable and result.passed and not result.relit
             if result.palette is not None and places:
                 state.palette = result.palette
-            if places and result.shift_candidates is not None and len(result.shift_candidates):
-                state.shift_candidates = result.shift_candidates
             if places:
                 state.previous_mask = result.observed_mask
-                if result.shift_px not in state.placed_at:
-                    state.placed_at.append(result.shift_px)
-                # Calibration error does not change during a print: once the part is tall enough in
-                # this view for the alignment to be unambiguous, later checks stay near that shift
-                # (and a runout cannot walk the expected outline down, check by check).
-                if not state.frozen:
-                    state.anchor = agreeing_anchor(result.shift_px, result.shift_candidates, shape_args["max_drift"])
-                    state.frozen = _silhouette_rows(regions.silhouette) >= 2 * regions.max_shift_px
+                state.placed(result, shape_args["max_drift"],
+                             tall=_silhouette_rows(regions.silhouette) >= 2 * regions.max_shift_px)
         self._learn_calibration_offsets(z, shape, shape_inputs, errors)
         # missing material alone gets its second look only from a camera no other camera corroborates
         failing = [name for name, r in shape.items() if r.usable and not r.passed]
@@ -943,6 +961,31 @@ def unless_both_views_grew(entry: dict, growth_pct: Sequence[float | None]) -> d
     return dict(entry, error_pct=None, abstained=True,
                 reason=f"{entry.get('reason', '')}; not held: both views saw the part grow ({rises} of the "
                        f"expected rise)")
+
+
+def follows_the_shifted_top(anchor: tuple[int, int] | None, moved_to: tuple[int, int], result: ShapeResult) -> bool:
+    """Whether a passing check would move a camera's anchor (dx, dy) to ``moved_to`` along the shift its newest band
+    reads, on a part whose newest layers may have been printed shifted (:func:`top_may_have_shifted`): the outline
+    following the shifted top. (An outline that moves the other way, or none, follows something else.)"""
+    if anchor is None or not top_may_have_shifted(result):
+        return False
+    band = result.band_shift
+    return (moved_to[0] - anchor[0]) * band.dx + (moved_to[1] - anchor[1]) * band.dy > 0
+
+
+def top_may_have_shifted(result: ShapeResult) -> bool:
+    """Whether a camera's newest layers may have been printed shifted: its newest band reads shifted
+    (:func:`band_reads_shifted`) on a part it saw rise (a fine growth reading of TOP_ROSE_PCT or more: the new
+    layers are all there, beside; strands or a stalled top that read as a shifted band do not rise)."""
+    return (band_reads_shifted(result.band_shift) and result.growth_pct is not None
+            and result.growth_pct >= TOP_ROSE_PCT)
+
+
+def band_reads_shifted(reading: BandShift | None) -> bool:
+    """Whether a camera's newest band reads shifted on its own: most of the pixels its best shift changes confirm
+    it (:data:`BAND_SHIFTED_SHARE`), and as many as a layer shift needs at least (SHIFT_MIN_SUPPORT_PX)."""
+    return (reading is not None and reading.confirmed >= BAND_SHIFTED_SHARE
+            and reading.support >= SHIFT_MIN_SUPPORT_PX)
 
 
 def agreeing_anchor(shift: tuple[int, int], candidates: np.ndarray | None, drift: int) -> tuple[int, int]:
