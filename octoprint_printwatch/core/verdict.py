@@ -25,6 +25,12 @@ from .tangle import loose_material
 SHIFT_VIEW_MAX_MISSING_PCT = 50.0
 
 
+#: A growth reading under this (%) is an outline that sank (a top face in the colour of what lies behind it
+#: that came and went, a part knocked over), not a part that stopped: the stall rules leave it out (a stall reads
+#: 0 +- a pixel step, about 15 % of a check's rise)
+SANK_BELOW_PCT = -15.0
+
+
 def band_shifts_of(shape: Mapping[str, ShapeResult]) -> dict[str, BandShift]:
     """{camera: BandShift}: the layer-shift evidence of the usable cameras that tested their newest band and see
     most of the part (SHIFT_VIEW_MAX_MISSING_PCT), not read against a relit background (ShapeResult.relit: lit bed
@@ -156,7 +162,7 @@ def missing_since_rise(kept: float | None, rise: float | None, missing: float,
         return missing, 0
     stop_within_interval = (rise is not None and min_growth_pct <= rise
                             and (rise_before or 0.0) >= COARSE_ROSE_BEFORE_PCT)
-    if kept is None or (rise is not None and not -15.0 <= rise < min_growth_pct and not stop_within_interval):
+    if kept is None or (rise is not None and not SANK_BELOW_PCT <= rise < min_growth_pct and not stop_within_interval):
         return None, 0
     if threshold is not None and missing - kept < threshold / 4.0:
         quiet += 1
@@ -212,7 +218,7 @@ def rise_for_loose_material(usable: Mapping[str, ShapeResult], growth: Sequence[
     if len(growth) >= 2 or (growth and len(usable) == 1):
         return float(np.median(growth))
     readings = [r.growth_pct if r.growth_pct is not None else r.coarse_growth_pct for r in usable.values()]
-    readings = [g for g in readings if g is not None and g >= -15.0]
+    readings = [g for g in readings if g is not None and g >= SANK_BELOW_PCT]
     if len(readings) >= 2 or (readings and len(usable) == 1):
         return float(np.median(readings))
     return None
@@ -229,7 +235,7 @@ def stopped_and_textured(usable: Mapping[str, ShapeResult], settings: DetectionS
     seen small read the rise only over a span or to the pixel; a span reaching back before the stop still reads
     part of the rise). A view that never saw the part rise, or one reading some rise, is no such witness."""
     readings = {cam: reading for cam, r in usable.items()
-                if (reading := finest_reading(r)) is not None and reading >= -15.0}
+                if (reading := finest_reading(r)) is not None and reading >= SANK_BELOW_PCT}
     if not readings or float(np.median(list(readings.values()))) >= PART_SLOWED_SOMEWHAT_PCT:
         return {}
     stopped = {cam for cam, reading in readings.items() if reading < settings.min_growth_pct
@@ -333,7 +339,7 @@ def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings,
                               and float(np.median(growth)) < settings.min_growth_pct and bool(bare_band))
         return stalled, bare_band
 
-    measured = {cam: r for cam, r in usable.items() if r.growth_pct is not None and r.growth_pct >= -15.0}
+    measured = {cam: r for cam, r in usable.items() if r.growth_pct is not None and r.growth_pct >= SANK_BELOW_PCT}
     growth = [r.growth_pct for r in measured.values()]
     # A stop is a change: a view whose own readings at its previous checks read the part rising (``held_rise_before``,
     # held_rise) needs no missing material to corroborate a one-check reading of no rise either. Strands piled on a
@@ -354,7 +360,7 @@ def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings,
     # (in addition to the one-check readings, never instead: a span reaching back before a stop reads part of
     # the rise, where a one-check reading already reads none)
     spanned = {cam: r.span_growth_pct for cam, r in usable.items()
-               if r.growth_pct is None and r.span_growth_pct is not None and r.span_growth_pct >= -15.0}
+               if r.growth_pct is None and r.span_growth_pct is not None and r.span_growth_pct >= SANK_BELOW_PCT}
     if spanned and not stalled:
         with_span = {**{cam: r.growth_pct for cam, r in measured.items()}, **spanned}
         # A gap a few pixels deep hides in the outline's tolerance, so a view whose span reading is the first
@@ -386,7 +392,7 @@ def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings,
             for cam in usable
             if cam in missing_at_rise or (rise_before.get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT}
     coarse = {cam: usable[cam].coarse_growth_pct for cam in rose
-              if usable[cam].coarse_growth_pct is not None and usable[cam].coarse_growth_pct >= -15.0}
+              if usable[cam].coarse_growth_pct is not None and usable[cam].coarse_growth_pct >= SANK_BELOW_PCT}
     coarse_stalled = (not growth and not top_closing and bool(coarse)
                       and float(np.median(list(coarse.values()))) < settings.min_growth_pct
                       and any(coarse[cam] < settings.min_growth_pct and rose[cam] is not None
@@ -404,7 +410,7 @@ def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings,
     # still, with nothing missing (the default set's layer_shift_05 at quality 35). Where one view is usable (a
     # one-camera rig) it is every view: nothing outvotes it, and the trace stands against its pixel step.
     readings = {cam: reading for cam, r in usable.items()
-                if (reading := finest_reading(r)) is not None and reading >= -15.0}
+                if (reading := finest_reading(r)) is not None and reading >= SANK_BELOW_PCT}
     stopped_views = [usable[cam] for cam, reading in readings.items() if reading < settings.min_growth_pct
                      and ((held_rise_before or {}).get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT]
     if (not stalled and not top_closing and len(stopped_views) >= stopped_views_needed(len(usable))
