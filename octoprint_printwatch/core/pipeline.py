@@ -544,9 +544,9 @@ class CameraState:
 
 #: A first look's chosen shift and its upper-outline match disagree beyond this many pixels (either axis)
 OUTLINE_DISAGREES_PX = 2
-# a view's newest band read shifted by at least this share of the pixels the shift changes (BandShift.confirmed) ...
+#: a view's newest band read shifted by at least this share of the pixels the shift changes (BandShift.confirmed) ...
 BAND_SHIFTED_SHARE = 0.5
-# ... on a part that rose by at least this share of the expected rise (ShapeResult.growth_pct)
+#: ... on a part that rose by at least this share of the expected rise (ShapeResult.growth_pct)
 TOP_ROSE_PCT = 50.0
 
 
