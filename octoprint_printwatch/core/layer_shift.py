@@ -741,6 +741,18 @@ def _sticks_out(shift: LayerShift) -> bool:
     return shift.overhang >= SHIFT_OVERHANG_SHARE * shift.support
 
 
+#: A view's newest band reads shifted on its own where its best shift is confirmed by this share of the pixels it
+#: changes (BandShift.confirmed) ... (band_reads_shifted)
+BAND_SHIFTED_SHARE = 0.5
+
+
+def band_reads_shifted(reading: BandShift | None) -> bool:
+    """Whether one camera's newest band reads shifted on its own: most of the pixels its best shift changes confirm
+    it (:data:`BAND_SHIFTED_SHARE`), and as many as a layer shift needs at least (:data:`SHIFT_MIN_SUPPORT_PX`)."""
+    return (reading is not None and reading.confirmed >= BAND_SHIFTED_SHARE
+            and reading.support >= SHIFT_MIN_SUPPORT_PX)
+
+
 def _one_sided(shift: LayerShift) -> bool:
     """Whether the move the other way is read clearly not there (SHIFT_OPPOSITE_MAX)."""
     return shift.opposite is None or shift.opposite.confirmed_sure < SHIFT_OPPOSITE_MAX

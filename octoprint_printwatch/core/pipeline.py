@@ -25,7 +25,7 @@ from .errors import PrintWatchError
 from .settings import DetectionSettings
 from .alignment import near_any
 from .growth import GROWTH_SPAN_CHECKS
-from .layer_shift import SHIFT_MIN_SUPPORT_PX, BandShift, LayerShift
+from .layer_shift import LayerShift, band_reads_shifted
 from .shape_check import ExpectedRegions, ShapeResult, check_shape, not_decisive_where_it_stood
 from .nest import SOLID_MIN_COVERAGE, STALL_READ_BELOW_GROWTH_PCT
 from .verdict import (RISE_HELD_READINGS, band_shifts_of, decide, finest_reading, held_rise, layer_shift_of,
@@ -544,9 +544,8 @@ class CameraState:
 
 #: A first look's chosen shift and its upper-outline match disagree beyond this many pixels (either axis)
 OUTLINE_DISAGREES_PX = 2
-#: a view's newest band read shifted by at least this share of the pixels the shift changes (BandShift.confirmed) ...
-BAND_SHIFTED_SHARE = 0.5
-#: ... on a part that rose by at least this share of the expected rise (ShapeResult.growth_pct)
+#: a view whose newest band reads shifted on its own (layer_shift.band_reads_shifted) on a part that rose by at least
+#: this share of the expected rise (ShapeResult.growth_pct) may have had its newest layers printed shifted
 TOP_ROSE_PCT = 50.0
 
 
@@ -979,13 +978,6 @@ def top_may_have_shifted(result: ShapeResult) -> bool:
     layers are all there, beside; strands or a stalled top that read as a shifted band do not rise)."""
     return (band_reads_shifted(result.band_shift) and result.growth_pct is not None
             and result.growth_pct >= TOP_ROSE_PCT)
-
-
-def band_reads_shifted(reading: BandShift | None) -> bool:
-    """Whether a camera's newest band reads shifted on its own: most of the pixels its best shift changes confirm
-    it (:data:`BAND_SHIFTED_SHARE`), and as many as a layer shift needs at least (SHIFT_MIN_SUPPORT_PX)."""
-    return (reading is not None and reading.confirmed >= BAND_SHIFTED_SHARE
-            and reading.support >= SHIFT_MIN_SUPPORT_PX)
 
 
 def agreeing_anchor(shift: tuple[int, int], candidates: np.ndarray | None, drift: int) -> tuple[int, int]:

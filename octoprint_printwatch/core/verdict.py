@@ -109,6 +109,19 @@ def finest_reading(result: ShapeResult) -> float | None:
     return next(iter(_rise_readings(result)), None)
 
 
+def finest_readings(usable: Mapping[str, ShapeResult]) -> dict[str, float]:
+    """Each view's finest reading of the rise (:func:`finest_reading`), where it has one and its outline did not sink
+    (:data:`SANK_BELOW_PCT`)."""
+    return {cam: reading for cam, r in usable.items()
+            if (reading := finest_reading(r)) is not None and reading >= SANK_BELOW_PCT}
+
+
+def held_a_rise(held_rise_before: Mapping[str, float] | None, camera: str) -> bool:
+    """Whether ``camera``'s readings before this check held a rise of :data:`COARSE_ROSE_BEFORE_PCT` or more
+    (``held_rise_before``: :func:`held_rise` per view): a stop in that view is a change."""
+    return ((held_rise_before or {}).get(camera) or 0.0) >= COARSE_ROSE_BEFORE_PCT
+
+
 #: A view's reading of a rise at its previous check corroborates a stop (decide's ``held_rise_before``) only
 #: when its last this many readings of the rise read one: where the camera cannot resolve the top, its readings
 #: jump by a pixel step from one check to the next (0-200 %), so one reading of a rise before a 0 is no history
@@ -234,12 +247,11 @@ def stopped_and_textured(usable: Mapping[str, ShapeResult], settings: DetectionS
     in that view as both a stop and a changed band, where no median of one-check readings exists to slow (views
     seen small read the rise only over a span or to the pixel; a span reaching back before the stop still reads
     part of the rise). A view that never saw the part rise, or one reading some rise, is no such witness."""
-    readings = {cam: reading for cam, r in usable.items()
-                if (reading := finest_reading(r)) is not None and reading >= SANK_BELOW_PCT}
+    readings = finest_readings(usable)
     if not readings or float(np.median(list(readings.values()))) >= PART_SLOWED_SOMEWHAT_PCT:
         return {}
-    stopped = {cam for cam, reading in readings.items() if reading < settings.min_growth_pct
-               and ((held_rise_before or {}).get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT}
+    stopped = {cam for cam, reading in readings.items()
+               if reading < settings.min_growth_pct and held_a_rise(held_rise_before, cam)}
     return textured_views({cam: usable[cam].band_texture for cam in stopped}, band_texture_before or {},
                           TEXTURE_JUMP_STRONG)
 
@@ -351,7 +363,7 @@ def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings,
     # -8 % beside one reading 29 % over a face it misses all along is a resized frame's pixel step, not a stop).
     unanimous = all(r.growth_pct < settings.min_growth_pct for r in measured.values())
     rose_before = set() if not unanimous or any(rise_read(r) >= FULL_RISE_PCT for r in usable.values()) else {
-        cam for cam in measured if ((held_rise_before or {}).get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT}
+        cam for cam in measured if held_a_rise(held_rise_before, cam)}
     stalled, bare_band = stall_rules({cam: r.growth_pct for cam, r in measured.items()}, rose_before)
     growth_since = "since the previous check"
     # Where one check's rise is too small for any reading in a view (2-3 px: a part seen small, checks a few
@@ -368,8 +380,7 @@ def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings,
         # fine, else over the span, else coarse, held by the reading before it: held_rise) corroborate it instead
         # when they read the part rising: a stop is a change, while a top the camera cannot tell from what lies
         # behind it never reads a rise, or reads one at one check and none at the next (pixel-step noise).
-        stopped = {cam for cam in spanned
-                   if ((held_rise_before or {}).get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT}
+        stopped = {cam for cam in spanned if held_a_rise(held_rise_before, cam)}
         stalled, bare_band = stall_rules(with_span, stopped)
         if stalled:
             growth = list(with_span.values())
@@ -409,10 +420,9 @@ def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings,
     # one of them (STOPPED_MIN_MISSING_PCT): two views misread a black top on a black bed under JPEG's blocks as
     # still, with nothing missing (the default set's layer_shift_05 at quality 35). Where one view is usable (a
     # one-camera rig) it is every view: nothing outvotes it, and the trace stands against its pixel step.
-    readings = {cam: reading for cam, r in usable.items()
-                if (reading := finest_reading(r)) is not None and reading >= SANK_BELOW_PCT}
-    stopped_views = [usable[cam] for cam, reading in readings.items() if reading < settings.min_growth_pct
-                     and ((held_rise_before or {}).get(cam) or 0.0) >= COARSE_ROSE_BEFORE_PCT]
+    readings = finest_readings(usable)
+    stopped_views = [usable[cam] for cam, reading in readings.items()
+                     if reading < settings.min_growth_pct and held_a_rise(held_rise_before, cam)]
     if (not stalled and not top_closing and len(stopped_views) >= stopped_views_needed(len(usable))
             and float(np.median(list(readings.values()))) < settings.min_growth_pct
             and any(r.missing_pct >= STOPPED_MIN_MISSING_PCT
