@@ -205,14 +205,16 @@ def lowest_missing_while_rising(kept: tuple[float, float | None] | None, rise: f
 def standing_offset(result: ShapeResult, while_rising: tuple[float, float | None] | None) -> bool:
     """Whether a view's missing material (``result``) is no more than it read at a check where it saw the part
     rise (``while_rising``: its lowest missing material, overall and of the newest band, at such checks;
-    :func:`lowest_missing_while_rising`): under half its threshold more overall, and under
-    :data:`BAND_GONE_SINCE_RISE_PCT` more of the newest band. Material missing while the part rose is a face the
-    camera cannot tell from what lies behind it (decide's "visibly grows" rule); the same share missing later is
-    that face still, while a stop leaves the newest layers missing on top of it."""
+    :func:`lowest_missing_while_rising`): under half its threshold more overall, or no more than the share of the
+    newest band it missed at its rising checks, and under :data:`BAND_GONE_SINCE_RISE_PCT` more of the newest band.
+    Material missing while the part rose is a face the camera cannot tell from what lies behind it (decide's
+    "visibly grows" rule); the same share missing later is that face still, while a stop leaves the newest layers
+    missing on top of it. (A view that missed a share of every newest band while the part rose misses that share
+    of each layer as it piles up: the whole part's share climbs toward it, check by check, with nothing stopped.)"""
     if while_rising is None:
         return False
     missing, band = while_rising
-    if result.missing_pct - missing >= result.threshold / 2.0:
+    if result.missing_pct - missing >= result.threshold / 2.0 and (band is None or result.missing_pct > band):
         return False
     return band is None or result.band_missing_pct is None or \
         result.band_missing_pct - band < BAND_GONE_SINCE_RISE_PCT

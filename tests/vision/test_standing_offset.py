@@ -57,3 +57,24 @@ def test_two_views_with_standing_offsets_wait():
 def test_only_rising_checks_set_the_offset():
     assert while_rising([(30.0, 60.0, None), (30.0, 60.0, 49.9), (12.0, 20.0, 0.0)]) is None
     assert while_rising([(12.0, None, 50.0), (15.0, 30.0, 80.0), (9.0, 40.0, 10.0)]) == (12.0, 30.0)
+
+
+def test_a_view_missing_a_share_of_every_band_while_rising_may_miss_that_share_of_the_part():
+    """Cross-check seed 23 033_detach (a 9 mm polygon, filament like the kapton bed, pair + 1; onset check 17): s0R
+    missed 55-61 % of its newest band while it read the part rising 60-100 % (26-29 % of the part). As the layers
+    it cannot tell from the bed piled up, its share of the whole part climbed check by check (34, 36, 38 ... 52 %)
+    with its band still 54-65 % missing: s0L (18 %) and s0R, two views of three, paused the print 11 checks before
+    its onset."""
+    s = DetectionSettings()
+    s0r = while_rising([(27.16, 55.03, 100.0), (26.15, 60.0, 60.0), (29.23, 60.96, 66.7)])
+    assert s0r == (26.15, 55.03)
+    now = {"s0L": view("s0L", 18.28, 40.59, coarse=20.0), "s0R": view("s0R", 36.02, 62.4, growth=33.3),
+           "s1": view("s1", 0.0, 0.0, coarse=120.0)}
+    assert decide(now, {}, s, missing_while_rising={"s0R": s0r})[0] == "ok"
+    # the base read only half the threshold over its lowest share of the part: 36 % is 10 points over 26 %
+    assert decide(now, {}, s, missing_while_rising={"s0R": (26.15, None)})[0] == "fail"
+    # more of the part missing than of each band it read while rising, or the newest band gone, still counts
+    beyond = {**now, "s0R": view("s0R", 55.03 + 0.5, 62.4, growth=33.3)}
+    assert decide(beyond, {}, s, missing_while_rising={"s0R": s0r})[0] == "fail"
+    band_gone = {**now, "s0R": view("s0R", 36.02, 55.03 + 25.0, growth=33.3)}
+    assert decide(band_gone, {}, s, missing_while_rising={"s0R": s0r})[0] == "fail"
