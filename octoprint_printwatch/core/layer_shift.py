@@ -822,12 +822,13 @@ def was_there_before(shift: LayerShift) -> bool:
             or _offset_held_by_the_null(shift) or _partly_there_all_along(shift))
 
 
-#: Readings of a shift at this share or more of the pixels it changes are not "clearly absent" (_partly_there_all_along).
+#: A reading of a shift at this share or more of the pixels it changes does not read it clearly absent, and a shift
+#: read so at each of this many checks that tested their band (the whole history with_history keeps) was partly there
+#: all along (_partly_there_all_along).
 SHIFT_PARTLY_THERE = 0.25
-#: Checks that tested their band that must all read a shift partly there (SHIFT_PARTLY_THERE) ... (the whole history
-#: with_history keeps) ...
 SHIFT_PARTLY_THERE_CHECKS = 4
-#: ... and that must each have read it, explained as well by a height error (_offset_held_by_the_null).
+#: The checks that must each have read a shift (SHIFT_WAS_NOT_THERE) explained as well by a height error
+#: (_offset_held_by_the_null).
 SHIFT_HELD_BY_NULL_CHECKS = 3
 
 
