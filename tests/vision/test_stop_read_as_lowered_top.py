@@ -14,11 +14,12 @@ from octoprint_printwatch.core.verdict import decide
 HELD = {"s0": 75.0}
 
 
-def view(*, coarse=0.0, null_dy=4, null_score=79.0, missing=0.0, relit=False):
-    """The one usable view: passing, nothing missing, a coarse rise reading and a band read as lowered by null_dy."""
-    r = ShapeResult("s0", 0.0, missing, missing, 0.0, 0.0, 0.0, 500, 5000, None, (0, 0), 7.0, 50.0,
+def view(*, coarse=0.0, null_dy=4, null_score=79.0, missing=0.0, relit=False, name="s0", fine=None):
+    """A usable view (the one of a one-camera rig by default): passing, nothing missing, a coarse (or fine) rise reading
+    and a band read as lowered by null_dy."""
+    r = ShapeResult(name, 0.0, missing, missing, 0.0, 0.0, 0.0, 500, 5000, fine, (0, 0), 7.0, 50.0,
                     passed=True, usable=True, reasons=[])
-    r.coarse_growth_pct, r.relit = coarse, relit
+    r.coarse_growth_pct, r.relit = (coarse if fine is None else None), relit
     r.band_shift = BandShift(dx=3, dy=6, support=79, against=0, moved=89, null_dy=null_dy, null_score=null_score,
                              tolerance=2.0)
     return r
@@ -47,3 +48,17 @@ def test_no_stop_without_a_lowered_top_a_held_rise_or_a_reading_of_none():
     assert decide({"s0": view(coarse=50.0)}, {}, s, held_rise_before=HELD)[0] == "ok"
     # a view read against a relit background gives no band evidence
     assert decide({"s0": view(relit=True)}, {}, s, held_rise_before=HELD)[0] == "ok"
+
+
+def test_no_stop_from_a_lowered_top_while_another_view_reads_the_full_rise():
+    """The default set's black tower on black PEI, sharpened (a perturbed replay): two views that held a rise read
+    0 % and 4 % with nothing missing, one of them its top 17 px low on 95 px, while the third read 200 %."""
+    s = DetectionSettings()
+    held = {"a": 90.0, "b": 91.0, "c": 95.0}
+    views = {"a": view(name="a", fine=0.0, null_dy=6, null_score=9.0),
+             "b": view(name="b", fine=4.2, null_dy=17, null_score=95.0),
+             "c": view(name="c", fine=200.0, null_dy=0, null_score=0.0)}
+    assert decide(views, {}, s, held_rise_before=held)[0] == "ok"
+    # without the view reading the full rise, the lowered top witnesses the two views' stop
+    views["c"] = view(name="c", fine=50.0, null_dy=0, null_score=0.0)
+    assert decide(views, {}, s, held_rise_before=held)[0] == "fail"
