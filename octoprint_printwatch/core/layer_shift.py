@@ -156,7 +156,7 @@ class BandShift:
 
     def figures(self) -> dict:
         return {"dx": self.dx, "dy": self.dy, "support": self.support, "against": self.against,
-                "moved": self.moved}
+                "moved": self.moved, "null_dy": self.null_dy, "null_score": round(float(self.null_score), 1)}
 
 
 @dataclass
@@ -751,6 +751,14 @@ def band_reads_shifted(reading: BandShift | None) -> bool:
     it (:data:`BAND_SHIFTED_SHARE`), and as many as a layer shift needs at least (:data:`SHIFT_MIN_SUPPORT_PX`)."""
     return (reading is not None and reading.confirmed >= BAND_SHIFTED_SHARE
             and reading.support >= SHIFT_MIN_SUPPORT_PX)
+
+
+def band_reads_lowered(reading: BandShift | None) -> bool:
+    """Whether one camera's newest band reads its top lowered on its own: the band's top moved down by more than the
+    alignment's tolerance explains the image best (``null_dy``), on as many pixels as a layer shift needs at least
+    (``null_score``, :data:`SHIFT_MIN_SUPPORT_PX`): confident bed where the top of the newest layers should stand."""
+    return (reading is not None and reading.null_dy > reading.tolerance
+            and reading.null_score >= SHIFT_MIN_SUPPORT_PX)
 
 
 def _one_sided(shift: LayerShift) -> bool:

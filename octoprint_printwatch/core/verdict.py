@@ -11,8 +11,8 @@ from typing import Collection, Mapping, Sequence
 import numpy as np
 
 from .settings import DetectionSettings
-from .layer_shift import (BandShift, LayerShift, confirms_layer_shift, describe_layer_shift, estimate_layer_shift,
-                          onto_earlier_places, with_history)
+from .layer_shift import (BandShift, LayerShift, band_reads_lowered, confirms_layer_shift, describe_layer_shift,
+                          estimate_layer_shift, onto_earlier_places, with_history)
 from .shape_check import ShapeResult
 from .nest import (NEST_MAX_COVERAGE, PART_SLOWED_SOMEWHAT_PCT, SOLID_MIN_COVERAGE, TEXTURE_JUMP_STRONG,
                    texture_jump_for, textured_views)
@@ -421,16 +421,31 @@ def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings,
     # span, else coarse), and their median must read no rise too; a trace of the newest layers must be missing in
     # one of them (STOPPED_MIN_MISSING_PCT): two views misread a black top on a black bed under JPEG's blocks as
     # still, with nothing missing (the default set's layer_shift_05 at quality 35). Where one view is usable (a
-    # one-camera rig) it is every view: nothing outvotes it, and the trace stands against its pixel step.
+    # one-camera rig) it is every view: nothing outvotes it, and the trace stands against its pixel step. A band whose
+    # top reads lowered (bed where it should stand) stands in for the trace while no view reads the full rise
+    # (stop_witnessed, twenty-second session).
     readings = finest_readings(usable)
     stopped_views = [usable[cam] for cam, reading in readings.items()
                      if reading < settings.min_growth_pct and held_a_rise(held_rise_before, cam)]
     if (not stalled and not top_closing and len(stopped_views) >= stopped_views_needed(len(usable))
             and float(np.median(list(readings.values()))) < settings.min_growth_pct
-            and any(r.missing_pct >= STOPPED_MIN_MISSING_PCT
-                    or (r.band_missing_pct or 0.0) >= 2.0 * STOPPED_MIN_MISSING_PCT for r in stopped_views)):
+            and any(stop_witnessed(r, usable) for r in stopped_views)):
         stalled, growth = True, list(readings.values())
     return Stall(stalled, growth, growth_since, bare_band)
+
+
+def stop_witnessed(result: ShapeResult, usable: Mapping[str, ShapeResult]) -> bool:
+    """Whether a view that held a rise and reads none now shows the stop itself (part_stalled's stopped views): a trace
+    of the part or of its newest band missing (STOPPED_MIN_MISSING_PCT), or its band's top read lowered
+    (layer_shift.band_reads_lowered; not on a relit view) while no usable view reads the part rising as expected
+    (FULL_RISE_PCT). The newest layers of a stop late in the interval, or of a filament in the bed's colour, are too
+    thin or too camouflaged to read missing, but the band's top shows bed where it should stand; a top the camera
+    cannot resolve reads no such move. A view reading the full rise stands against a top read lower, not against
+    material gone (a black tower on a black bed, sharpened: one view read its top 17 px low, another 200 %)."""
+    return (result.missing_pct >= STOPPED_MIN_MISSING_PCT
+            or (result.band_missing_pct or 0.0) >= 2.0 * STOPPED_MIN_MISSING_PCT
+            or (not result.relit and band_reads_lowered(result.band_shift)
+                and all(rise_read(r) < FULL_RISE_PCT for r in usable.values())))
 
 
 def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings: DetectionSettings,
@@ -492,7 +507,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       (every usable view where fewer are usable: :func:`stopped_views_needed`; each its finest reading: fine, else
       over the span, else coarse), where the median of every view's finest
       reading reads none either, need more than a trace (``STOPPED_MIN_MISSING_PCT`` of the part, or twice that of
-      the newest band, in one of them),
+      the newest band, in one of them, or its band's top read lowered while no view reads the full rise:
+      :func:`stop_witnessed`),
       or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
       abstains reports no ``error_pct`` and never fails);
     * or when two views (not relit) read their outline sunk by half a check's rise or more and one of them misses four
