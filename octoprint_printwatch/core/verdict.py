@@ -134,6 +134,11 @@ RISE_HELD_READINGS = 2
 FULL_RISE_PCT = 100.0
 
 
+def a_view_reads_the_full_rise(usable: Mapping[str, ShapeResult]) -> bool:
+    """Whether any usable view reads the rise the model expects (:data:`FULL_RISE_PCT`, :func:`rise_read`)."""
+    return any(rise_read(r) >= FULL_RISE_PCT for r in usable.values())
+
+
 def rise_read(r: ShapeResult) -> float:
     """A view's highest reading of the rise at this check (% of the expected): fine, over its span or coarse;
     0 (none)."""
@@ -214,7 +219,9 @@ def standing_offset(result: ShapeResult, while_rising: tuple[float, float | None
     if while_rising is None:
         return False
     missing, band = while_rising
-    if result.missing_pct - missing >= result.threshold / 2.0 and (band is None or result.missing_pct > band):
+    within_part = (result.missing_pct - missing < result.threshold / 2.0
+                   or (band is not None and result.missing_pct <= band))
+    if not within_part:
         return False
     return band is None or result.band_missing_pct is None or \
         result.band_missing_pct - band < BAND_GONE_SINCE_RISE_PCT
@@ -364,7 +371,7 @@ def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings,
     # Nor while a view's one-check reading still reads some rise: only where every one reads a stall (a view reading
     # -8 % beside one reading 29 % over a face it misses all along is a resized frame's pixel step, not a stop).
     unanimous = all(r.growth_pct < settings.min_growth_pct for r in measured.values())
-    rose_before = set() if not unanimous or any(rise_read(r) >= FULL_RISE_PCT for r in usable.values()) else {
+    rose_before = set() if not unanimous or a_view_reads_the_full_rise(usable) else {
         cam for cam in measured if held_a_rise(held_rise_before, cam)}
     stalled, bare_band = stall_rules({cam: r.growth_pct for cam, r in measured.items()}, rose_before)
     growth_since = "since the previous check"
@@ -423,7 +430,7 @@ def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings,
     # still, with nothing missing (the default set's layer_shift_05 at quality 35). Where one view is usable (a
     # one-camera rig) it is every view: nothing outvotes it, and the trace stands against its pixel step. A band whose
     # top reads lowered (bed where it should stand) stands in for the trace while no view reads the full rise
-    # (stop_witnessed, twenty-second session).
+    # (stop_witnessed).
     readings = finest_readings(usable)
     stopped_views = [usable[cam] for cam, reading in readings.items()
                      if reading < settings.min_growth_pct and held_a_rise(held_rise_before, cam)]
@@ -445,7 +452,7 @@ def stop_witnessed(result: ShapeResult, usable: Mapping[str, ShapeResult]) -> bo
     return (result.missing_pct >= STOPPED_MIN_MISSING_PCT
             or (result.band_missing_pct or 0.0) >= 2.0 * STOPPED_MIN_MISSING_PCT
             or (not result.relit and band_reads_lowered(result.band_shift)
-                and all(rise_read(r) < FULL_RISE_PCT for r in usable.values())))
+                and not a_view_reads_the_full_rise(usable)))
 
 
 def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings: DetectionSettings,

@@ -33,6 +33,7 @@ import cv2
 import numpy as np
 
 from ..camera import Camera
+from ..material import clean_mask, material_evidence
 from ..render import render_heights, render_silhouette
 from .matching import MATCHERS, MatchSettings, compute_disparity
 from .rectify import (RECTIFICATIONS, Rectification, align_on_bed, phase_shift, predict_disparity_range,
@@ -990,8 +991,6 @@ def foreground_mask(background: np.ndarray, frame: np.ndarray, prior: np.ndarray
 
     ``prior`` is where the part may be; the bed around it is the noise reference.
     """
-    from ..material import clean_mask, material_evidence
-
     if background.shape != frame.shape:
         background = cv2.resize(background, (frame.shape[1], frame.shape[0]), interpolation=cv2.INTER_AREA)
     near = cv2.dilate(prior.astype(np.uint8), np.ones((31, 31), np.uint8)) > 0
