@@ -465,6 +465,8 @@ class CameraState:
     #: needs the previous check's)
     last_observed: np.ndarray | None = None
     last_observed_z: float | None = None
+    #: (dx, dy) px: where that check laid the outline (the new-material test measures beyond it too)
+    last_observed_shift: tuple[int, int] | None = None
     #: (z, observed mask) of its usable checks before the last one, newest first (at most
     #: GROWTH_SPAN_CHECKS - 1): the growth test's older looks, where one check's rise is too small to read
     older_observed: list = field(default_factory=list)
@@ -534,12 +536,12 @@ class CameraState:
             self.anchor = anchor
             self.frozen = tall
 
-    def saw(self, mask: np.ndarray | None, z: float) -> None:
-        """Remember ``mask`` as the camera's look at ``z`` (its latest usable check)."""
+    def saw(self, mask: np.ndarray | None, z: float, shift: tuple[int, int] | None = None) -> None:
+        """Remember ``mask`` as the camera's look at ``z`` (its latest usable check), its outline laid at ``shift``."""
         if self.last_observed is not None and self.last_observed_z is not None and self.last_observed_z != z:
             self.older_observed = [(self.last_observed_z, self.last_observed),
                                    *self.older_observed][:GROWTH_SPAN_CHECKS - 1]
-        self.last_observed, self.last_observed_z = mask, z
+        self.last_observed, self.last_observed_z, self.last_observed_shift = mask, z, shift
 
 
 #: A first look's chosen shift and its upper-outline match disagree beyond this many pixels (either axis)
@@ -645,6 +647,7 @@ class CheckRunner:
                 older_looks=[(mask, self.plan.view(name, zz).silhouette) for zz, mask in state.older_observed
                              if self.previous_z is not None and zz < self.previous_z],
                 placed_at=tuple(state.placed_at),
+                shift_before=state.last_observed_shift,
             )
             result = check_shape(**shape_args, candidates=state.shift_candidates, track_candidates=True)
             result = not_decisive_where_it_stood(result, shape_args)
@@ -655,7 +658,7 @@ class CheckRunner:
                 state.first_look_outline = result.outline_best_candidate
             errors[name] = shape[name].error_pct if result.usable else None
             if result.usable:
-                state.saw(result.observed_mask, z)
+                state.saw(result.observed_mask, z, shape[name].shift_px)
                 state.last_growth = result.growth_pct
             # (a view read against a relit background is remembered only for the part's rise: lit bed read as the
             # part where the light under it was guessed would be taken for the part's colours and outline next
@@ -836,7 +839,7 @@ class CheckRunner:
                 why = f"while {', '.join(vouching)} see it in place"
             elif pending is None:
                 state.pending_offset, state.offset_abstained = probe.shift_px, True
-                state.saw(probe.observed_mask, z)
+                state.saw(probe.observed_mask, z, probe.shift_px)
                 shape[name] = replace(result, usable=False, passed=True, decisive=False, reasons=[
                     f"{where}, and no other camera sees the part in place: not judged until the next check tells "
                     f"a calibration error (the part grows there) from a part knocked off (it does not)"])
@@ -862,7 +865,7 @@ class CheckRunner:
         probe.reasons.append(reason)
         shape[name] = probe
         errors[name] = probe.error_pct
-        state.saw(probe.observed_mask, z)
+        state.saw(probe.observed_mask, z, probe.shift_px)
         state.previous_mask, state.last_growth = probe.observed_mask, probe.growth_pct
         if probe.palette is not None:
             state.palette = probe.palette

@@ -572,6 +572,7 @@ def check_shape(
     foreign_before: np.ndarray | None = None,
     older_looks: Sequence[tuple[np.ndarray, np.ndarray]] = (),
     placed_at: Sequence[tuple[int, int]] = (),
+    shift_before: tuple[int, int] | None = None,
 ) -> ShapeResult:
     """Shape check of one camera (module docstring). Images (h, w, 3) uint8 BGR of the camera's size.
 
@@ -592,6 +593,8 @@ def check_shape(
     newest of them the model's top rose enough since (:data:`GROWTH_SPAN_CHECKS`; ``growth_span``).
     ``placed_at``: the shifts (dx, dy) this camera's passing checks aligned the outline at (its reflection zone
     covers them all).
+    ``shift_before``: the shift (dx, dy) this camera laid the outline at, at its previous usable check (the one
+    ``last_observed`` was seen at), or None.
     """
     h, w = regions.silhouette.shape
     if frame.shape[:2] != (h, w):
@@ -787,8 +790,13 @@ def check_shape(
     # part, attached to it; verdict.decide weighs it over the cameras
     new_outside = None
     if seen_before is not None:
+        # (the outline laid elsewhere at the previous check: the calibration error is the same at both, so the part
+        # may stand at either place, and its newest band, seen beyond this check's outline, is no strand)
+        placed_before = (shift_mask(expected, *shift_before)
+                         if shift_before is not None and tuple(shift_before) != (dx, dy) else None)
         new_outside = new_material(observed, seen_before, expected_a, search_a, tol, regions.px_per_mm,
                                    ignore=reflection_a, marks=dont_care_a, linked=~evidence.bed,
+                                   placed_before=placed_before,
                                    bed_to_image=regions.bed_to_image,
                                    not_the_prints=or_lying_on_rods(not_part_colour, on_rods),
                                    # (compare_masks' objects from above, on the same masks: the same

@@ -128,6 +128,7 @@ def new_material(
     not_the_prints: Callable[[np.ndarray], np.ndarray] | None = None,
     foreign: np.ndarray | None = None,
     part_in_place: bool = False,
+    placed_before: np.ndarray | None = None,
 ) -> NewMaterial | None:
     """Material seen now and not at the previous check, outside the expected part and attached to it.
 
@@ -156,6 +157,10 @@ def new_material(
         (the same pixels: ``new`` lies in ``observed``). None: searched here.
     part_in_place : the part stands where it belongs (compare_masks' Comparison.part_in_place): objects are then
         taken apart from a ring around its outline before they are searched, as compare_masks does.
+    placed_before : (h, w) bool or None, the expected silhouette now laid where the camera's previous check laid its
+        outline (its alignment then), when that differs: the calibration error is the same at both checks, so the
+        part may stand at either place, and where the outline jumped since, the part's newest band lies beyond this
+        check's outline (new since then, far from it) though it is the part's. Material is measured beyond both.
     Returns None when the test cannot be made (no scale, no previous mask, empty expected part).
     """
     if px_per_mm <= 0 or previous is None or previous.shape != observed.shape or not expected.any():
@@ -165,13 +170,17 @@ def new_material(
     none = NewMaterial(0.0, 0, 0, np.zeros(observed.shape, bool), direction=direction)
     # upwards the tolerance is doubled: the part's top may stand a layer higher than the model says
     grown = outline_zone(expected, tol, tol)
+    either = expected
+    if placed_before is not None and placed_before.shape == expected.shape and placed_before.any():
+        grown = grown | outline_zone(placed_before, tol, tol)
+        either = expected | placed_before
     outside = observed & ~grown
     new = outside & search & ~dilate(previous, 2)
     if ignore is not None:
         new &= ~ignore
     if not new.any():   # (nothing new at all: the distances below are not needed)
         return none
-    distance = cv2.distanceTransform((~expected).astype(np.uint8), cv2.DIST_L2, 3)
+    distance = cv2.distanceTransform((~either).astype(np.uint8), cv2.DIST_L2, 3)
     far = distance > min_distance_mm * px_per_mm
     if not (new & far).any():   # most checks of a normal print end here
         return none
