@@ -546,6 +546,12 @@ def place_outline(observed: np.ndarray, observed_strong: np.ndarray, expected: n
     return Placement((dx, dy), best_candidate, shift_candidates, outline_best)
 
 
+def outline_jumped(before: tuple[int, int] | None, now: tuple[int, int], tolerance: float) -> bool:
+    """The outline was laid more than ``tolerance`` px from where the previous check laid it (``before``: its shift,
+    None when unknown): a jump, not the alignment's jitter the outline's tolerance ring absorbs."""
+    return before is not None and float(np.hypot(before[0] - now[0], before[1] - now[1])) > tolerance
+
+
 def check_shape(
     camera: str,
     background: np.ndarray,
@@ -790,10 +796,10 @@ def check_shape(
     # part, attached to it; verdict.decide weighs it over the cameras
     new_outside = None
     if seen_before is not None:
-        # (the outline laid elsewhere at the previous check: the calibration error is the same at both, so the part
-        # may stand at either place, and its newest band, seen beyond this check's outline, is no strand)
-        placed_before = (shift_mask(expected, *shift_before)
-                         if shift_before is not None and tuple(shift_before) != (dx, dy) else None)
+        # (the outline laid elsewhere at the previous check, farther than the tolerance ring absorbs: the calibration
+        # error is the same at both, so the part may stand at either place, and its newest band, seen beyond this
+        # check's outline, is no strand)
+        placed_before = (shift_mask(expected, *shift_before) if outline_jumped(shift_before, (dx, dy), tol) else None)
         new_outside = new_material(observed, seen_before, expected_a, search_a, tol, regions.px_per_mm,
                                    ignore=reflection_a, marks=dont_care_a, linked=~evidence.bed,
                                    placed_before=placed_before,

@@ -8,6 +8,7 @@ Material is measured beyond both placements; loops beyond both still count.
 import numpy as np
 
 from octoprint_printwatch.core.pipeline import CameraState
+from octoprint_printwatch.core.shape_check import outline_jumped
 from octoprint_printwatch.core.tangle import TWO_VIEWS_MM2, new_material
 
 from .synthetic import H, PART, W, Box
@@ -56,3 +57,9 @@ def test_a_camera_remembers_where_its_last_look_laid_the_outline():
     assert state.last_observed_shift == (3, -1)
     state.saw(mask, 4.0, (12, -3))
     assert state.last_observed_shift == (12, -3) and state.last_observed_z == 4.0
+
+
+def test_only_a_jump_beyond_the_tolerance_is_a_jump():
+    assert not outline_jumped(None, (3, 0), TOL)
+    assert not outline_jumped((1, 1), (2, 2), TOL)            # jitter the tolerance ring absorbs
+    assert outline_jumped((1, -1), (10, -3), TOL)             # an outline laid 9 px away
