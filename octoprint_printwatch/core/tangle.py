@@ -111,6 +111,13 @@ def arc_around(material: np.ndarray, expected: np.ndarray, scale_mm2: float) -> 
     return 360.0 * (1.0 - min(gap, ARC_SECTORS) / ARC_SECTORS)
 
 
+def beyond(silhouette: np.ndarray, tolerance: float, min_distance_px: float) -> np.ndarray:
+    """(h, w) bool: where new material may count against ``silhouette``: outside its tolerance ring (doubled
+    upwards) and farther than ``min_distance_px`` from it."""
+    distance = cv2.distanceTransform((~silhouette).astype(np.uint8), cv2.DIST_L2, 3)
+    return ~outline_zone(silhouette, tolerance, tolerance) & (distance > min_distance_px)
+
+
 def new_material(
     observed: np.ndarray,
     previous: np.ndarray,
@@ -160,7 +167,8 @@ def new_material(
     placed_before : (h, w) bool or None, the expected silhouette now laid where the camera's previous check laid its
         outline (its alignment then), when that differs: the calibration error is the same at both checks, so the
         part may stand at either place, and where the outline jumped since, the part's newest band lies beyond this
-        check's outline (new since then, far from it) though it is the part's. Material is measured beyond both.
+        check's outline (new since then, far from it) though it is the part's. Material is counted beyond both (the
+        pixels near that placement are taken away at the end; which blobs count is judged as without it).
     Returns None when the test cannot be made (no scale, no previous mask, empty expected part).
     """
     if px_per_mm <= 0 or previous is None or previous.shape != observed.shape or not expected.any():
@@ -170,17 +178,13 @@ def new_material(
     none = NewMaterial(0.0, 0, 0, np.zeros(observed.shape, bool), direction=direction)
     # upwards the tolerance is doubled: the part's top may stand a layer higher than the model says
     grown = outline_zone(expected, tol, tol)
-    either = expected
-    if placed_before is not None and placed_before.shape == expected.shape and placed_before.any():
-        grown = grown | outline_zone(placed_before, tol, tol)
-        either = expected | placed_before
     outside = observed & ~grown
     new = outside & search & ~dilate(previous, 2)
     if ignore is not None:
         new &= ~ignore
     if not new.any():   # (nothing new at all: the distances below are not needed)
         return none
-    distance = cv2.distanceTransform((~either).astype(np.uint8), cv2.DIST_L2, 3)
+    distance = cv2.distanceTransform((~expected).astype(np.uint8), cv2.DIST_L2, 3)
     far = distance > min_distance_mm * px_per_mm
     if not (new & far).any():   # most checks of a normal print end here
         return none
@@ -216,8 +220,13 @@ def new_material(
         at_foot = keep & (inside >= 0.8 * np.maximum(area, 1))
         keep &= ~at_foot
     counted = keep[labels] & far
-    pixels = int(counted.sum())
     foot = at_foot[labels] & far
+    if placed_before is not None and placed_before.shape == expected.shape and placed_before.any():
+        # (only pixels are taken away: the objects above were judged on this check's outline, as without it)
+        beyond_before = beyond(placed_before, tol, min_distance_mm * px_per_mm)
+        counted &= beyond_before
+        foot &= beyond_before
+    pixels = int(counted.sum())
     foot_pixels = int(np.count_nonzero(foot)) if at_foot.any() else 0
     blobs = int(len(np.unique(labels[counted]))) if pixels else 0
     scale = 1.0 / (px_per_mm * px_per_mm)

@@ -63,3 +63,18 @@ def test_only_a_jump_beyond_the_tolerance_is_a_jump():
     assert not outline_jumped(None, (3, 0), TOL)
     assert not outline_jumped((1, 1), (2, 2), TOL)            # jitter the tolerance ring absorbs
     assert outline_jumped((1, -1), (10, -3), TOL)             # an outline laid 9 px away
+
+
+def test_the_previous_placement_only_takes_material_away():
+    # a dark object reaching down from above the search box to the part's side, through where the previous
+    # check laid the outline: it stays the object it is (not the print's), however the placements differ
+    search = Box(60, 40, 280, 200).mask()
+    before = Box(PART.x0, PART.y0 + 30, PART.x1, PART.y1).mask()
+    hotend = Box(PART.x0 - 14, 0, PART.x0 - 4, PART.y0 + 40).mask()
+    loops = Box(PART.x1 + JUMP_PX + 2, 100, PART.x1 + JUMP_PX + 30, 140).mask()
+    now = PART.mask() | hotend | loops
+    for placed in (PART.mask(), Box(PART.x0 - 10, PART.y0, PART.x1 - 10, PART.y1).mask()):
+        with_it = new_material(now, before, OUTLINE_NOW, search, TOL, PX_PER_MM, placed_before=placed)
+        without = new_material(now, before, OUTLINE_NOW, search, TOL, PX_PER_MM)
+        assert with_it.pixels <= without.pixels
+        assert not (with_it.mask & ~without.mask).any()
