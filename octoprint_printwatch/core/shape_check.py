@@ -547,9 +547,10 @@ def place_outline(observed: np.ndarray, observed_strong: np.ndarray, expected: n
 
 
 def outline_jumped(before: tuple[int, int] | None, now: tuple[int, int], tolerance: float) -> bool:
-    """The outline was laid more than ``tolerance`` px from where the previous check laid it (``before``: its shift,
-    None when unknown): a jump, not the alignment's jitter the outline's tolerance ring absorbs."""
-    return before is not None and float(np.hypot(before[0] - now[0], before[1] - now[1])) > tolerance
+    """The outline was laid more than two tolerances + 1 px from where the previous check laid it (``before``: its
+    shift, None when unknown): the two outlines' tolerance rings are apart, a jump; a move within that (1-3 px) is
+    the alignment's jitter, and a thin layer shift's material just beyond the 2 mm margin lies that close."""
+    return before is not None and float(np.hypot(before[0] - now[0], before[1] - now[1])) > 2.0 * tolerance + 1.0
 
 
 def check_shape(
@@ -796,7 +797,7 @@ def check_shape(
     # part, attached to it; verdict.decide weighs it over the cameras
     new_outside = None
     if seen_before is not None:
-        # (the outline laid elsewhere at the previous check, farther than the tolerance ring absorbs: the calibration
+        # (the outline laid elsewhere at the previous check, its tolerance ring apart from this one's: the calibration
         # error is the same at both, so the part may stand at either place, and its newest band, seen beyond this
         # check's outline, is no strand)
         placed_before = (shift_mask(expected, *shift_before) if outline_jumped(shift_before, (dx, dy), tol) else None)

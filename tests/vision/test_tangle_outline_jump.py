@@ -62,6 +62,7 @@ def test_a_camera_remembers_where_its_last_look_laid_the_outline():
 def test_only_a_jump_beyond_the_tolerance_is_a_jump():
     assert not outline_jumped(None, (3, 0), TOL)
     assert not outline_jumped((1, 1), (2, 2), TOL)            # jitter the tolerance ring absorbs
+    assert not outline_jumped((3, -2), (2, 0), TOL)           # 2.2 px: the rings still overlap
     assert outline_jumped((1, -1), (10, -3), TOL)             # an outline laid 9 px away
 
 
