@@ -580,6 +580,8 @@ class CheckRunner:
         # the last four checks' layer-shift evidence: (had a check before it, {camera: BandShift})
         self.band_shift_history: list[tuple[bool, dict]] = []
         self.last_decision: dict[str, Any] = {}  # the last check's arguments of decide()
+        # whether an earlier check gave any view a reading of the rise (decide's first_rise_reading)
+        self.rise_read = False
 
     def run_check(self, layer: int, z: float, frames: Mapping[str, np.ndarray | None]) -> CheckResult:
         """Shape check per camera (size per pair once wired in) and the combined verdict."""
@@ -701,8 +703,10 @@ class CheckRunner:
                                   extra_before=extra_before, band_coverage_before=coverage_before,
                                   rise_before=rise_before, missing_before=missing_before,
                                   missing_at_rise=missing_at_rise, band_texture_before=texture_before,
-                                  held_rise_before=held_rise_before, missing_while_rising=while_rising)
+                                  held_rise_before=held_rise_before, missing_while_rising=while_rising,
+                                  first_rise_reading=not self.rise_read)
         verdict, reasons = decide(**self.last_decision)
+        self.rise_read = self.rise_read or any(r.usable and finest_reading(r) is not None for r in shape.values())
         for name, state in self.cameras.items():
             r = shape.get(name)
             if r is None or not r.usable:

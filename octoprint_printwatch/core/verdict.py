@@ -91,6 +91,13 @@ STOPPED_VIEWS = 2
 STOPPED_MIN_MISSING_PCT = 1.0
 
 
+#: At the print's first reading of the rise (no view held one before), the trace of the part (%) one view that reads
+#: none must miss more than at its previous check: with no rise held before, a stop is told from a top the camera
+#: cannot resolve by its missing layers alone (before any onset on the development sets no such view missed over
+#: 0.74 %; a stop under way since before the first check missed 3.5-7 % more)
+FIRST_STOP_MIN_MISSING_PCT = 2.0 * STOPPED_MIN_MISSING_PCT
+
+
 def stopped_views_needed(usable: int) -> int:
     """How many views that held a rise and read none now stall a print with a trace missing (decide): STOPPED_VIEWS,
     or every usable view where fewer are usable. A second view outvotes one view's pixel step; a one-camera rig has
@@ -306,8 +313,10 @@ class Stall:
 def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings, *, top_closing: bool,
                  band_coverage_before: Mapping[str, float] | None, rise_before: Mapping[str, float | None] | None,
                  missing_before: Mapping[str, float] | None, missing_at_rise: Mapping[str, float] | None,
-                 held_rise_before: Mapping[str, float] | None) -> Stall:
-    """The stall rules of :func:`decide` (its docstring lists them) over the usable views' rise readings."""
+                 held_rise_before: Mapping[str, float] | None, first_rise_reading: bool = False) -> Stall:
+    """The stall rules of :func:`decide` (its docstring lists them) over the usable views' rise readings.
+    ``first_rise_reading``: no earlier check of the print gave any view a reading of the rise
+    (stopped_at_the_first_reading)."""
     # A part that stopped growing stopped in every view: the growth test is decided on the median over
     # the cameras that could measure it, so one camera fooled by a top face the colour of the
     # background cannot pause a print on its own.
@@ -438,7 +447,40 @@ def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings,
             and float(np.median(list(readings.values()))) < settings.min_growth_pct
             and any(stop_witnessed(r, usable) for r in stopped_views)):
         stalled, growth = True, list(readings.values())
+    if not stalled and not top_closing and first_rise_reading and stopped_at_the_first_reading(
+            usable, readings, settings, missing_before=missing_before):
+        stalled, growth = True, list(readings.values())
     return Stall(stalled, growth, growth_since, bare_band)
+
+
+def stopped_at_the_first_reading(usable: Mapping[str, ShapeResult], readings: Mapping[str, float],
+                                 settings: DetectionSettings, *, missing_before: Mapping[str, float]) -> bool:
+    """Whether a stop under way since before the print's first reading of the rise shows at that reading (part_stalled,
+    ``first_rise_reading``): STOPPED_VIEWS views (every usable view where fewer are usable: stopped_views_needed), not
+    relit, read no rise (their finest readings, ``readings``: finest_readings), the median of every view's reading is
+    none either, no view reads the full rise (FULL_RISE_PCT), and one of the stopped views misses
+    FIRST_STOP_MIN_MISSING_PCT more of the part than at its previous check (``missing_before``: a view not usable
+    there shows nothing gone since) or reads its band's top lowered (layer_shift.band_reads_lowered: bed where the
+    newest layers' top should stand, as stop_witnessed).
+
+    A part that stopped before the first check (a runout, a tangle from the first layers) was already short there, and
+    the first check cannot tell that from the calibration error: its outline is placed on the short part, and from
+    then on no view ever reads a rise, so none holds one (held_a_rise) for the stall rules above. The model says the
+    part rose by a whole interval since; two views reading none at once, with the newest layers' absence showing as
+    material missing in one of them, is that stop. A top the camera cannot tell from the bed reads no rise too, but
+    misses nothing there, or only in one view at a time; and an outline anchored off the part (a top view over a
+    black part's shadow and brim) misses as much or more at every check from the first on: the stop's layers go
+    missing since the previous check."""
+    stopped = [r for cam, r in usable.items()
+               if cam in readings and readings[cam] < settings.min_growth_pct and not r.relit]
+
+    def gone_since(r: ShapeResult) -> bool:
+        return r.camera in missing_before and r.missing_pct - missing_before[r.camera] >= FIRST_STOP_MIN_MISSING_PCT
+
+    return (bool(readings) and len(stopped) >= stopped_views_needed(len(usable))
+            and float(np.median(list(readings.values()))) < settings.min_growth_pct
+            and not a_view_reads_the_full_rise(usable)
+            and any(gone_since(r) or band_reads_lowered(r.band_shift) for r in stopped))
 
 
 def stop_witnessed(result: ShapeResult, usable: Mapping[str, ShapeResult]) -> bool:
@@ -466,7 +508,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
            missing_at_rise: Mapping[str, float] | None = None,
            band_texture_before: Mapping[str, float] | None = None,
            held_rise_before: Mapping[str, float] | None = None,
-           missing_while_rising: Mapping[str, tuple[float, float | None]] | None = None) -> tuple[str, list[str]]:
+           missing_while_rising: Mapping[str, tuple[float, float | None]] | None = None,
+           first_rise_reading: bool = False) -> tuple[str, list[str]]:
     """The combined decision rule -> (verdict, reasons).
 
     * A camera counts only when it gave a frame and its background still matches the bed
@@ -515,7 +558,11 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       over the span, else coarse), where the median of every view's finest
       reading reads none either, need more than a trace (``STOPPED_MIN_MISSING_PCT`` of the part, or twice that of
       the newest band, in one of them, or its band's top read lowered while no view reads the full rise:
-      :func:`stop_witnessed`),
+      :func:`stop_witnessed`); nor, at the print's first reading of the rise (``first_rise_reading``: no earlier
+      check gave any view one, so none held a rise), do as many views that read none, where the median reads none,
+      no view the full rise, and one of them misses ``FIRST_STOP_MIN_MISSING_PCT`` more of the part than at its
+      previous check or reads its band's top lowered (:func:`stopped_at_the_first_reading`: a stop before the first
+      check), not where a top surface closes,
       or when a pair's size check reports an error over ``size_threshold_pct`` (a pair that
       abstains reports no ``error_pct`` and never fails);
     * or when two views (not relit) read their outline sunk by half a check's rise or more and one of them misses four
@@ -555,7 +602,7 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     failing = [r for r in usable.values() if not r.passed]
     stall = part_stalled(usable, settings, top_closing=top_closing, band_coverage_before=band_coverage_before,
                          rise_before=rise_before, missing_before=missing_before, missing_at_rise=missing_at_rise,
-                         held_rise_before=held_rise_before)
+                         held_rise_before=held_rise_before, first_rise_reading=first_rise_reading)
     stalled, growth, growth_since, bare_band = stall.stalled, stall.growth, stall.since, stall.bare_band
     size_fail, size_usable = [], 0
     for key, entry in size.items():
