@@ -581,7 +581,7 @@ class CheckRunner:
         self.band_shift_history: list[tuple[bool, dict]] = []
         self.last_decision: dict[str, Any] = {}  # the last check's arguments of decide()
         # whether an earlier check gave any view a reading of the rise (decide's first_rise_reading)
-        self.rise_read = False
+        self.rise_ever_read = False
 
     def run_check(self, layer: int, z: float, frames: Mapping[str, np.ndarray | None]) -> CheckResult:
         """Shape check per camera (size per pair once wired in) and the combined verdict."""
@@ -704,9 +704,8 @@ class CheckRunner:
                                   rise_before=rise_before, missing_before=missing_before,
                                   missing_at_rise=missing_at_rise, band_texture_before=texture_before,
                                   held_rise_before=held_rise_before, missing_while_rising=while_rising,
-                                  first_rise_reading=not self.rise_read)
+                                  first_rise_reading=not self.rise_ever_read)
         verdict, reasons = decide(**self.last_decision)
-        self.rise_read = self.rise_read or any(r.usable and finest_reading(r) is not None for r in shape.values())
         for name, state in self.cameras.items():
             r = shape.get(name)
             if r is None or not r.usable:
@@ -722,6 +721,7 @@ class CheckRunner:
             reading = finest_reading(r)
             state.read_rise_last_check = reading is not None
             if reading is not None:
+                self.rise_ever_read = True
                 state.rise_readings = (*state.rise_readings, reading)[-RISE_HELD_READINGS:]
             state.last_rise = r.growth_pct if r.growth_pct is not None else r.coarse_growth_pct
             if verdict == "ok":   # (a check that failed is no healthy look: a part knocked loose still "rises")

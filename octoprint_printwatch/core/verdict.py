@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Collection, Mapping, Sequence
+from typing import Callable, Collection, Mapping, Sequence
 
 import numpy as np
 
@@ -443,9 +443,8 @@ def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings,
     readings = finest_readings(usable)
     stopped_views = [usable[cam] for cam, reading in readings.items()
                      if reading < settings.min_growth_pct and held_a_rise(held_rise_before, cam)]
-    if (not stalled and not top_closing and len(stopped_views) >= stopped_views_needed(len(usable))
-            and float(np.median(list(readings.values()))) < settings.min_growth_pct
-            and any(stop_witnessed(r, usable) for r in stopped_views)):
+    if not stalled and not top_closing and views_read_a_stop(usable, readings, stopped_views, settings,
+                                                             lambda r: stop_witnessed(r, usable)):
         stalled, growth = True, list(readings.values())
     if not stalled and not top_closing and first_rise_reading and stopped_at_the_first_reading(
             usable, readings, settings, missing_before=missing_before):
@@ -474,13 +473,22 @@ def stopped_at_the_first_reading(usable: Mapping[str, ShapeResult], readings: Ma
     stopped = [r for cam, r in usable.items()
                if cam in readings and readings[cam] < settings.min_growth_pct and not r.relit]
 
-    def gone_since(r: ShapeResult) -> bool:
-        return r.camera in missing_before and r.missing_pct - missing_before[r.camera] >= FIRST_STOP_MIN_MISSING_PCT
+    def witnessed(r: ShapeResult) -> bool:   # (missing_before: a view not usable there shows nothing gone since)
+        gone = r.camera in missing_before and r.missing_pct - missing_before[r.camera] >= FIRST_STOP_MIN_MISSING_PCT
+        return gone or band_reads_lowered(r.band_shift)
 
+    return not a_view_reads_the_full_rise(usable) and views_read_a_stop(usable, readings, stopped, settings, witnessed)
+
+
+def views_read_a_stop(usable: Mapping[str, ShapeResult], readings: Mapping[str, float], stopped: Sequence[ShapeResult],
+                      settings: DetectionSettings, witnessed: Callable[[ShapeResult], bool]) -> bool:
+    """Whether the views reading no rise (``stopped``) are as many as a stop needs (stopped_views_needed), the median
+    of every view's finest reading (``readings``) reads none too, and one of them shows the stop (``witnessed``): the
+    part_stalled rules for views that held a rise (stop_witnessed) and at the print's first reading
+    (stopped_at_the_first_reading)."""
     return (bool(readings) and len(stopped) >= stopped_views_needed(len(usable))
             and float(np.median(list(readings.values()))) < settings.min_growth_pct
-            and not a_view_reads_the_full_rise(usable)
-            and any(gone_since(r) or band_reads_lowered(r.band_shift) for r in stopped))
+            and any(witnessed(r) for r in stopped))
 
 
 def stop_witnessed(result: ShapeResult, usable: Mapping[str, ShapeResult]) -> bool:
