@@ -260,6 +260,32 @@ def shift_evidence_without_rods(observed: np.ndarray, bed: np.ndarray, undecided
     return observed & ~rods, bed & ~rods, undecided | rods
 
 
+#: A newest band lies inside the older layers' outline in a view where no more than this share of it stands beyond the
+#: tolerance of that outline (a narrower tier's top face seen from above: the part adds nothing to its outline there).
+BAND_INSIDE_MAX_SHARE = 0.05
+
+
+def inside_the_older_layers(band: np.ndarray, older: np.ndarray, tol: float) -> bool:
+    """Whether the newest ``band`` lies inside the ``older`` layers' outline in this view (BAND_INSIDE_MAX_SHARE): a move
+    of it can then show only as material past the older layers' edge, never as bed where it stood. Both (h, w) bool."""
+    total = int(np.count_nonzero(band))
+    return total > 0 and np.count_nonzero(band & ~dilate(older, tol)) <= BAND_INSIDE_MAX_SHARE * total
+
+
+def standing_material(observed: np.ndarray, last_look: np.ndarray | None,
+                      look_before: np.ndarray | None) -> np.ndarray | None:
+    """(h, w) bool: material seen now that this camera also saw at each of its two looks before (``last_look``, the
+    previous check's, and ``look_before``, the one before it), or None without both. The layers printed since the
+    previous check did not exist at either look: a band moved sideways can stick out onto such material only where
+    something else already stood (the older layers' own outline misfit, a shadow, the parked hotend), so it is no
+    evidence of the move either way. (Two looks, not one: the first check after a shift's onset sees its newest
+    top land where the onset check's shifted top already stood.)"""
+    if last_look is None or look_before is None or last_look.shape != observed.shape \
+            or look_before.shape != observed.shape:
+        return None
+    return observed & last_look & look_before
+
+
 def _not_a_mark(observed: np.ndarray, last_observed: np.ndarray, expected: np.ndarray, previous: np.ndarray,
                 tol: float) -> np.ndarray:
     """(h, w) bool: material seen now that no skirt, brim or bed mark can be: marks are printed in the first layers,
@@ -771,6 +797,14 @@ def check_shape(
                                         | bed_evidence)
             if reflection_a is not None:
                 marks = marks | reflection_a
+            if inside_the_older_layers(band_a, before_band, tol):
+                # the band can show a move only where it would stick out past the older layers' edge, where their
+                # own misfit stands: material seen there at both looks before is no evidence of the move
+                standing = standing_material(observed, seen_before,
+                                             older_looks[0][0][crop]
+                                             if older_looks and older_looks[0][0].shape == (h, w) else None)
+                if standing is not None:
+                    marks = marks | standing
             shift_observed, shift_bed, marks = shift_evidence_without_rods(observed, bed_evidence, marks,
                                                                            comparison.rods, expected_a)
             shifted_band = band_shift(shift_observed, shift_bed, before_band, band_a, reach, reach // 2,
