@@ -79,6 +79,26 @@ def unseen_by_partner(result: ShapeResult, usable: Mapping[str, ShapeResult], pa
     return bool(partners) and all(p.passed and p.extra_pct == 0.0 for p in partners)
 
 
+def unseen_by_the_other_views(result: ShapeResult, usable: Mapping[str, ShapeResult]) -> bool:
+    """True when ``result`` fails on extra material (more than half its missing material, not decisive, its newest
+    band within the band threshold) while every other ``usable`` view passes and sees no extra material at all, at
+    least one of them not read against a relit background.
+
+    Material standing beside the part stands on the bed, where other cameras look too: a strand or blob shows some
+    extra in a second view. Extra material no other view sees in any amount is the failing view's own error: its
+    outline laid beside the part (a first look or an anchor on a brim or a 2 mm slice: the part's side beyond the
+    outline), its background frame (a parked head's shadow whose edge moved a few px). Extra material that is
+    decisive (four times the threshold, or with missing material where the part stood) and a newest band displaced
+    (a layer shift that one view's band sees) still count from one view.
+    """
+    if (result.passed or result.decisive or result.extra_pct * 2.0 <= result.missing_pct
+            or (result.band_error_pct is not None and result.band_error_pct > result.band_threshold)):
+        return False
+    others = [r for name, r in usable.items() if name != result.camera]
+    return (any(not r.relit for r in others)
+            and all(r.passed and r.extra_pct == 0.0 for r in others))
+
+
 #: A coarse growth reading counts in decide only from a view that read the part rising this much (%) at its
 #: previous check (fine or coarse reading)
 COARSE_ROSE_BEFORE_PCT = 50.0
@@ -528,7 +548,9 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       part found elsewhere: the part moved; extra material four times the threshold); extra material
       alone that appeared at once (``extra_before``: each camera's extra at its previous check) in one
       camera of a stereo pair (``pairs``) whose partner passes and sees none does not count
-      (:func:`unseen_by_partner`); views read against a relit background (``ShapeResult.relit``) count only
+      (:func:`unseen_by_partner`), nor does extra material that is not decisive, with the newest band within its
+      threshold, while every other usable view passes and sees no extra material (:func:`unseen_by_the_other_views`);
+      views read against a relit background (``ShapeResult.relit``) count only
       alongside a failing view that was not (in no share of views, nor for loose material or a layer shift),
     * while the part visibly grows (median growth >= 50 %), a camera failing on missing material
       alone does not count (a face the colour of what lies behind it looks missing); nor does missing
@@ -669,6 +691,9 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     # is sometimes seen by one camera of a pair only), and a pair with one usable camera is a single view.
     extra_before = extra_before or {}
     failing = [r for r in failing if not unseen_by_partner(r, usable, pairs, extra_before.get(r.camera))]
+    # ... nor does extra material (not decisive, its newest band fitting) that no other view sees in any amount while
+    # they all pass: material on the bed shows in a second view; the failing view's own outline or background does not
+    failing = [r for r in failing if not unseen_by_the_other_views(r, usable)]
     # A view read against a relit background (``ShapeResult.relit``: a reflection swept across a glossy bed) guesses
     # the light under the part from the bed around it; where the reflection crosses the part it reads lit bed as
     # material (extra where there is none, or a missing top as there). It corroborates a view that was not
