@@ -79,24 +79,39 @@ def unseen_by_partner(result: ShapeResult, usable: Mapping[str, ShapeResult], pa
     return bool(partners) and all(p.passed and p.extra_pct == 0.0 for p in partners)
 
 
+#: A view reads the part rising as the model says at or above this share of a check's expected rise (%: the "visibly
+#: grows" figure of decide)
+VISIBLY_RISING_PCT = 50.0
+
+
 def unseen_by_the_other_views(result: ShapeResult, usable: Mapping[str, ShapeResult]) -> bool:
-    """True when ``result`` fails on extra material (more than half its missing material, not decisive, its newest
-    band within the band threshold) while every other ``usable`` view passes and sees no extra material at all, at
-    least one of them not read against a relit background.
+    """True when ``result`` fails on extra material (more than half its missing material) that every other ``usable``
+    view, at least one of them not read against a relit background, does not see at all while it passes: when that
+    extra material is not decisive and the newest band is within its threshold, or when it is decisive on extra
+    material alone (four times the threshold, under a third of the threshold missing, the part not found whole
+    elsewhere) while this view, not relit, and another view not relit read the part rising as the model says.
 
     Material standing beside the part stands on the bed, where other cameras look too: a strand or blob shows some
-    extra in a second view. Extra material no other view sees in any amount is the failing view's own error: its
-    outline laid beside the part (a first look or an anchor on a brim or a 2 mm slice: the part's side beyond the
-    outline), its background frame (a parked head's shadow whose edge moved a few px). Extra material that is
-    decisive (four times the threshold, or with missing material where the part stood) and a newest band displaced
-    (a layer shift that one view's band sees) still count from one view.
+    extra in a second view, and a part that detached or spills strands does not keep rising in the view that sees
+    them. Extra material no other view sees in any amount is the failing view's own error: its outline laid beside
+    the part (a first look or an anchor on a brim or a 2 mm slice: the part's side beyond the outline), its background
+    frame (a parked head's shadow whose edge moved: lit bed). A displaced newest band with extra material under four
+    times the threshold (a layer shift one view's band sees) still counts from one view.
     """
-    if (result.passed or result.decisive or result.extra_pct * 2.0 <= result.missing_pct
-            or (result.band_error_pct is not None and result.band_error_pct > result.band_threshold)):
+    if result.passed or result.extra_pct * 2.0 <= result.missing_pct:
         return False
     others = [r for name, r in usable.items() if name != result.camera]
-    return (any(not r.relit for r in others)
-            and all(r.passed and r.extra_pct == 0.0 for r in others))
+    if not (any(not r.relit for r in others) and all(r.passed and r.extra_pct == 0.0 for r in others)):
+        return False
+    if not result.decisive:
+        return result.band_error_pct is None or result.band_error_pct <= result.band_threshold
+
+    def rising(r: ShapeResult) -> bool:
+        return not r.relit and r.growth_pct is not None and r.growth_pct >= VISIBLY_RISING_PCT
+
+    return (result.moved_px is None and result.extra_pct >= 4.0 * result.threshold
+            and result.missing_pct < result.threshold / 3.0
+            and rising(result) and any(rising(r) for r in others))
 
 
 #: A coarse growth reading counts in decide only from a view that read the part rising this much (%) at its
@@ -548,8 +563,9 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       part found elsewhere: the part moved; extra material four times the threshold); extra material
       alone that appeared at once (``extra_before``: each camera's extra at its previous check) in one
       camera of a stereo pair (``pairs``) whose partner passes and sees none does not count
-      (:func:`unseen_by_partner`), nor does extra material that is not decisive, with the newest band within its
-      threshold, while every other usable view passes and sees no extra material (:func:`unseen_by_the_other_views`);
+      (:func:`unseen_by_partner`), nor does extra material that every other usable view passes without seeing any of
+      (not decisive with the newest band within its threshold, or four times the threshold with nothing missing while
+      this view and another read the part rising: :func:`unseen_by_the_other_views`);
       views read against a relit background (``ShapeResult.relit``) count only
       alongside a failing view that was not (in no share of views, nor for loose material or a layer shift),
     * while the part visibly grows (median growth >= 50 %), a camera failing on missing material
@@ -691,9 +707,12 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     # is sometimes seen by one camera of a pair only), and a pair with one usable camera is a single view.
     extra_before = extra_before or {}
     failing = [r for r in failing if not unseen_by_partner(r, usable, pairs, extra_before.get(r.camera))]
-    # ... nor does extra material (not decisive, its newest band fitting) that no other view sees in any amount while
-    # they all pass: material on the bed shows in a second view; the failing view's own outline or background does not
-    failing = [r for r in failing if not unseen_by_the_other_views(r, usable)]
+    # ... nor does extra material that no other view sees in any amount while they all pass (not decisive, its newest
+    # band fitting; or decisive on extra alone while it and another view read the part rising): material on the bed
+    # shows in a second view; the failing view's own outline or background frame does not
+    unseen = {r.camera for r in failing if unseen_by_the_other_views(r, usable)}
+    failing = [r for r in failing if r.camera not in unseen]
+    decisive = [r for r in decisive if r.camera not in unseen]
     # A view read against a relit background (``ShapeResult.relit``: a reflection swept across a glossy bed) guesses
     # the light under the part from the bed around it; where the reflection crosses the part it reads lit bed as
     # material (extra where there is none, or a missing top as there). It corroborates a view that was not

@@ -39,8 +39,16 @@ def test_extra_material_no_other_view_sees_does_not_pause_a_two_view_rig():
 def test_decisive_extra_a_displaced_band_or_no_view_to_ask_still_pause():
     s = DetectionSettings()
     other = view("b")
-    # four times the threshold: a detached part or a spaghetti seen from one side only
-    assert decide({"a": view("a", extra=40.0), "b": other}, {}, s)[0] == "fail"
+    # four times the threshold where a view cannot read the part rising (a part knocked loose, strands from a nozzle
+    # printing in the air) or with missing material beside it (the part displaced): a detachment or a spaghetti seen
+    # from one side only
+    heap = view("a", extra=40.0)
+    assert heap.decisive
+    assert decide({"a": replace(heap, growth_pct=None), "b": other}, {}, s)[0] == "fail"
+    assert decide({"a": replace(heap, growth_pct=30.0), "b": other}, {}, s)[0] == "fail"
+    assert decide({"a": heap, "b": replace(other, growth_pct=None)}, {}, s)[0] == "fail"
+    assert decide({"a": view("a", extra=40.0, missing=3.0), "b": other}, {}, s)[0] == "fail"
+    assert decide({"a": replace(heap, moved_px=(30, 0)), "b": other}, {}, s)[0] == "fail"
     # the newest band displaced (a layer shift one view's band sees)
     banded = view("a", extra=8.0, band=57.0)
     assert not unseen_by_the_other_views(banded, {"a": banded, "b": other})
@@ -53,3 +61,16 @@ def test_decisive_extra_a_displaced_band_or_no_view_to_ask_still_pause():
     # missing material is not this rule's
     missing = view("a", missing=12.0, extra=1.0)
     assert not unseen_by_the_other_views(missing, {"a": missing, "b": other})
+
+
+def test_decisive_extra_no_other_view_sees_while_two_views_read_the_part_rise_does_not_pause():
+    # lit bed where the background frame had a shadow, far beside a part that rises as the model says in this view
+    # and another (cross-check seed 27 ``016_normal`` s1, 39.6 %); the part's side beyond an outline laid down a brim
+    # (seed 22 ``017_normal`` s0R, 53 %, its band "displaced" by the same material)
+    s = DetectionSettings()
+    heap = view("a", extra=39.6, band=92.0)
+    views = {"a": heap, "b": view("b"), "c": replace(view("c"), growth_pct=None), "d": view("d")}
+    assert heap.decisive and unseen_by_the_other_views(heap, views)
+    assert decide(views, {}, s)[0] == "ok"
+    # ... a second view that sees some of it is a witness
+    assert decide({**views, "d": view("d", extra=0.5)}, {}, s)[0] == "fail"
