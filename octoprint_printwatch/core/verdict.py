@@ -87,16 +87,17 @@ VISIBLY_RISING_PCT = 50.0
 def unseen_by_the_other_views(result: ShapeResult, usable: Mapping[str, ShapeResult]) -> bool:
     """True when ``result`` fails on extra material (more than half its missing material) that every other ``usable``
     view, at least one of them not read against a relit background, does not see at all while it passes: when that
-    extra material is not decisive and the newest band is within its threshold, or when it is decisive on extra
-    material alone (four times the threshold, under a third of the threshold missing, the part not found whole
-    elsewhere) while this view, not relit, and another view not relit read the part rising as the model says.
+    extra material is not decisive and the newest band is within its threshold, or when it is decisive (four times
+    the threshold, or with missing material) but at least twice the missing material, the part not found whole
+    elsewhere, while this view, not relit, and another view not relit read the part rising as the model says.
 
     Material standing beside the part stands on the bed, where other cameras look too: a strand or blob shows some
     extra in a second view, and a part that detached or spills strands does not keep rising in the view that sees
-    them. Extra material no other view sees in any amount is the failing view's own error: its outline laid beside
-    the part (a first look or an anchor on a brim or a 2 mm slice: the part's side beyond the outline), its background
-    frame (a parked head's shadow whose edge moved: lit bed). A displaced newest band with extra material under four
-    times the threshold (a layer shift one view's band sees) still counts from one view.
+    them; a part that moved leaves about as much missing where it stood as it brings extra where it went. Extra
+    material no other view sees in any amount is the failing view's own error: its outline laid beside the part (a
+    first look or an anchor on a brim or a 2 mm slice: the part's side beyond the outline, the brim filling the
+    outline's other edge), its background frame (a parked head's shadow whose edge moved: lit bed). A displaced
+    newest band beside extra material that is not decisive (a layer shift one view's band sees) still counts.
     """
     if result.passed or result.extra_pct * 2.0 <= result.missing_pct:
         return False
@@ -109,8 +110,7 @@ def unseen_by_the_other_views(result: ShapeResult, usable: Mapping[str, ShapeRes
     def rising(r: ShapeResult) -> bool:
         return not r.relit and r.growth_pct is not None and r.growth_pct >= VISIBLY_RISING_PCT
 
-    return (result.moved_px is None and result.extra_pct >= 4.0 * result.threshold
-            and result.missing_pct < result.threshold / 3.0
+    return (result.moved_px is None and result.extra_pct >= 2.0 * result.missing_pct
             and rising(result) and any(rising(r) for r in others))
 
 
@@ -564,8 +564,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       alone that appeared at once (``extra_before``: each camera's extra at its previous check) in one
       camera of a stereo pair (``pairs``) whose partner passes and sees none does not count
       (:func:`unseen_by_partner`), nor does extra material that every other usable view passes without seeing any of
-      (not decisive with the newest band within its threshold, or four times the threshold with nothing missing while
-      this view and another read the part rising: :func:`unseen_by_the_other_views`);
+      (not decisive with the newest band within its threshold, or decisive with twice as much extra as missing
+      material while this view and another read the part rising: :func:`unseen_by_the_other_views`);
       views read against a relit background (``ShapeResult.relit``) count only
       alongside a failing view that was not (in no share of views, nor for loose material or a layer shift),
     * while the part visibly grows (median growth >= 50 %), a camera failing on missing material
@@ -708,7 +708,7 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     extra_before = extra_before or {}
     failing = [r for r in failing if not unseen_by_partner(r, usable, pairs, extra_before.get(r.camera))]
     # ... nor does extra material that no other view sees in any amount while they all pass (not decisive, its newest
-    # band fitting; or decisive on extra alone while it and another view read the part rising): material on the bed
+    # band fitting; or decisive, mostly extra, while it and another view read the part rising): material on the bed
     # shows in a second view; the failing view's own outline or background frame does not
     unseen = {r.camera for r in failing if unseen_by_the_other_views(r, usable)}
     failing = [r for r in failing if r.camera not in unseen]
