@@ -16,7 +16,7 @@ from .layer_shift import (BandShift, LayerShift, band_reads_lowered, confirms_la
 from .shape_check import ShapeResult
 from .nest import (NEST_MAX_COVERAGE, PART_SLOWED_SOMEWHAT_PCT, SOLID_MIN_COVERAGE, TEXTURE_JUMP_STRONG,
                    texture_jump_for, textured_views)
-from .tangle import loose_material
+from .tangle import TWO_VIEWS_MM2, loose_material
 
 
 #: A view reading more than this share (%) of the whole part missing gives no layer-shift evidence: a shift moves the
@@ -84,12 +84,21 @@ def unseen_by_partner(result: ShapeResult, usable: Mapping[str, ShapeResult], pa
 VISIBLY_RISING_PCT = 50.0
 
 
+def sees_nothing_extra(result: ShapeResult) -> bool:
+    """True when a view passes with no extra material at all and measured less new material beside the part than
+    the loose-material rule asks of each of two views (``tangle.TWO_VIEWS_MM2``): strands lying off the part's
+    outline show there first."""
+    new = result.new_outside
+    return (result.passed and result.extra_pct == 0.0
+            and (new is None or new.area_mm2 < TWO_VIEWS_MM2))
+
+
 def unseen_by_the_other_views(result: ShapeResult, usable: Mapping[str, ShapeResult]) -> bool:
     """True when ``result`` fails on extra material (more than half its missing material) that every other ``usable``
-    view, at least one of them not read against a relit background, does not see at all while it passes: when that
-    extra material is not decisive and the newest band is within its threshold, or when it is decisive (four times
-    the threshold, or with missing material) but at least twice the missing material, the part not found whole
-    elsewhere, while this view, not relit, and another view not relit read the part rising as the model says.
+    view, at least one of them not read against a relit background, does not see at all (:func:`sees_nothing_extra`):
+    when that extra material is not decisive and the newest band is within its threshold, or when it is decisive
+    (four times the threshold, or with missing material) but at least twice the missing material, the part not found
+    whole elsewhere, while this view, not relit, and another view not relit read the part rising as the model says.
 
     Material standing beside the part stands on the bed, where other cameras look too: a strand or blob shows some
     extra in a second view, and a part that detached or spills strands does not keep rising in the view that sees
@@ -102,7 +111,7 @@ def unseen_by_the_other_views(result: ShapeResult, usable: Mapping[str, ShapeRes
     if result.passed or result.extra_pct * 2.0 <= result.missing_pct:
         return False
     others = [r for name, r in usable.items() if name != result.camera]
-    if not (any(not r.relit for r in others) and all(r.passed and r.extra_pct == 0.0 for r in others)):
+    if not (any(not r.relit for r in others) and all(sees_nothing_extra(r) for r in others)):
         return False
     if not result.decisive:
         return result.band_error_pct is None or result.band_error_pct <= result.band_threshold

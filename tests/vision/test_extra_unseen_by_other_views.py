@@ -11,6 +11,7 @@ from dataclasses import replace
 
 from octoprint_printwatch.core.settings import DetectionSettings
 from octoprint_printwatch.core.shape_check import ShapeResult
+from octoprint_printwatch.core.tangle import NewMaterial
 from octoprint_printwatch.core.verdict import decide, unseen_by_the_other_views
 
 
@@ -32,6 +33,12 @@ def test_extra_material_no_other_view_sees_does_not_pause_a_two_view_rig():
     # a second view that sees some extra material (and passes) is a witness: the first view counts
     verdict, reasons = decide({"a": beside, "b": view("b", extra=1.0)}, {}, s)
     assert verdict == "fail" and "a: differs" in reasons
+    # ... and one that measured new material beside the part (strands off the outline; seed 24 ``030_spaghetti``'s
+    # first failing check: 11 % extra in s0, s1 passing with none in its outline but 9 mm^2 new beside it)
+    strands = replace(view("b"), new_outside=NewMaterial(9.0, 150, 2))
+    verdict, reasons = decide({"a": beside, "b": strands}, {}, s)
+    assert verdict == "fail" and reasons == ["a: differs"]
+    assert decide({"a": beside, "b": replace(strands, new_outside=NewMaterial(0.8, 12, 1))}, {}, s)[0] == "ok"
     # ... as does a second view that fails itself
     assert decide({"a": beside, "b": view("b", missing=20.0, extra=8.0)}, {}, s)[0] == "fail"
 
