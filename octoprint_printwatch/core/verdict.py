@@ -82,6 +82,10 @@ def unseen_by_partner(result: ShapeResult, usable: Mapping[str, ShapeResult], pa
 #: A view reads the part rising as the model says at or above this share of a check's expected rise (%: the "visibly
 #: grows" figure of decide)
 VISIBLY_RISING_PCT = 50.0
+#: ... and a decisive view's extra material at least this many times its missing material: a part or newest layers that
+#: moved leave a gap where they stood (layer shifts seen by one view this way before: 1.4-2.6 times; an outline beside
+#: a brim on normal prints: 3.6-6.7 times)
+MOSTLY_EXTRA_RATIO = 3.0
 
 
 def sees_nothing_extra(result: ShapeResult) -> bool:
@@ -97,8 +101,9 @@ def unseen_by_the_other_views(result: ShapeResult, usable: Mapping[str, ShapeRes
     """True when ``result`` fails on extra material (more than half its missing material) that every other ``usable``
     view, at least one of them not read against a relit background, does not see at all (:func:`sees_nothing_extra`):
     when that extra material is not decisive and the newest band is within its threshold, or when it is decisive
-    (four times the threshold, or with missing material) but at least twice the missing material, the part not found
-    whole elsewhere, while this view, not relit, and another view not relit read the part rising as the model says.
+    (four times the threshold, or with missing material) but ``MOSTLY_EXTRA_RATIO`` times the missing material, the
+    part not found whole elsewhere, while this view, not relit, and another view not relit read the part rising as the
+    model says.
 
     Material standing beside the part stands on the bed, where other cameras look too: a strand or blob shows some
     extra in a second view, and a part that detached or spills strands does not keep rising in the view that sees
@@ -119,7 +124,7 @@ def unseen_by_the_other_views(result: ShapeResult, usable: Mapping[str, ShapeRes
     def rising(r: ShapeResult) -> bool:
         return not r.relit and r.growth_pct is not None and r.growth_pct >= VISIBLY_RISING_PCT
 
-    return (result.moved_px is None and result.extra_pct >= 2.0 * result.missing_pct
+    return (result.moved_px is None and result.extra_pct >= MOSTLY_EXTRA_RATIO * result.missing_pct
             and rising(result) and any(rising(r) for r in others))
 
 
@@ -573,7 +578,7 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       alone that appeared at once (``extra_before``: each camera's extra at its previous check) in one
       camera of a stereo pair (``pairs``) whose partner passes and sees none does not count
       (:func:`unseen_by_partner`), nor does extra material that every other usable view passes without seeing any of
-      (not decisive with the newest band within its threshold, or decisive with twice as much extra as missing
+      (not decisive with the newest band within its threshold, or decisive with three times as much extra as missing
       material while this view and another read the part rising: :func:`unseen_by_the_other_views`);
       views read against a relit background (``ShapeResult.relit``) count only
       alongside a failing view that was not (in no share of views, nor for loose material or a layer shift),
