@@ -39,6 +39,9 @@ def test_extra_material_no_other_view_sees_does_not_pause_a_two_view_rig():
     verdict, reasons = decide({"a": beside, "b": strands}, {}, s)
     assert verdict == "fail" and reasons == ["a: differs"]
     assert decide({"a": beside, "b": replace(strands, new_outside=NewMaterial(0.8, 12, 1))}, {}, s)[0] == "ok"
+    # (the loops at the part's foot count: 1.1 mm^2 beyond the bed-marks zone, 7.4 in it)
+    at_foot = replace(strands, new_outside=NewMaterial(1.1, 20, 1, at_foot_mm2=7.4))
+    assert decide({"a": beside, "b": at_foot}, {}, s)[0] == "fail"
     # ... as does a second view that fails itself
     assert decide({"a": beside, "b": view("b", missing=20.0, extra=8.0)}, {}, s)[0] == "fail"
 
