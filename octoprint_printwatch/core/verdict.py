@@ -16,7 +16,7 @@ from .layer_shift import (BandShift, LayerShift, band_reads_lowered, confirms_la
 from .shape_check import ShapeResult
 from .nest import (NEST_MAX_COVERAGE, PART_SLOWED_SOMEWHAT_PCT, SOLID_MIN_COVERAGE, TEXTURE_JUMP_STRONG,
                    texture_jump_for, textured_views)
-from .tangle import loose_material
+from .tangle import TWO_VIEWS_MM2, loose_material
 
 
 #: A view reading more than this share (%) of the whole part missing gives no layer-shift evidence: a shift moves the
@@ -77,6 +77,56 @@ def unseen_by_partner(result: ShapeResult, usable: Mapping[str, ShapeResult], pa
     names = [b if a == result.camera else a for a, b in pairs if result.camera in (a, b)]
     partners = [usable[name] for name in names if name in usable]
     return bool(partners) and all(p.passed and p.extra_pct == 0.0 for p in partners)
+
+
+#: A view reads the part rising as the model says at or above this share of a check's expected rise (%: the "visibly
+#: grows" figure of decide)
+VISIBLY_RISING_PCT = 50.0
+#: ... and a decisive view's extra material at least this many times its missing material: a part or newest layers that
+#: moved leave a gap where they stood (layer shifts seen by one view this way before: 1.4-2.6 times; an outline beside
+#: a brim on normal prints: 3.6-6.7 times)
+MOSTLY_EXTRA_RATIO = 3.0
+
+
+def sees_nothing_extra(result: ShapeResult) -> bool:
+    """True when a view passes with no extra material at all and measured less new material beside the part, its foot
+    included, than the loose-material rule asks of each of two views (``tangle.TWO_VIEWS_MM2``): strands lying off
+    the part's outline show there first (seed 24 ``030_spaghetti``'s first catch: 1.1 mm^2 beyond the bed-marks zone
+    and 7.4 at the foot in the view whose outline read none)."""
+    new = result.new_outside
+    return (result.passed and result.extra_pct == 0.0
+            and (new is None or new.with_foot_mm2 < TWO_VIEWS_MM2))
+
+
+def unseen_by_the_other_views(result: ShapeResult, usable: Mapping[str, ShapeResult]) -> bool:
+    """True when ``result`` fails on extra material (more than half its missing material) that every other ``usable``
+    view, at least one of them not read against a relit background, does not see at all (:func:`sees_nothing_extra`):
+    when that extra material is not decisive and the newest band is within its threshold, or when it is decisive
+    (four times the threshold, or with missing material) but ``MOSTLY_EXTRA_RATIO`` times the missing material, the
+    part not found whole elsewhere, while this view, not relit, and another view not relit read the part rising as the
+    model says.
+
+    Material standing beside the part stands on the bed, where other cameras look too: a strand or blob shows some
+    extra in a second view, and a part that detached or spills strands does not keep rising in the view that sees
+    them; a part that moved leaves about as much missing where it stood as it brings extra where it went. Extra
+    material no other view sees in any amount is the failing view's own error: its outline laid beside the part (a
+    first look or an anchor on a brim or a 2 mm slice: the part's side beyond the outline, the brim filling the
+    outline's other edge), its background frame (a parked head's shadow whose edge moved: lit bed). A displaced
+    newest band beside extra material that is not decisive (a layer shift one view's band sees) still counts.
+    """
+    if result.passed or result.extra_pct * 2.0 <= result.missing_pct:
+        return False
+    others = [r for name, r in usable.items() if name != result.camera]
+    if not (any(not r.relit for r in others) and all(sees_nothing_extra(r) for r in others)):
+        return False
+    if not result.decisive:
+        return result.band_error_pct is None or result.band_error_pct <= result.band_threshold
+
+    def rising(r: ShapeResult) -> bool:
+        return not r.relit and r.growth_pct is not None and r.growth_pct >= VISIBLY_RISING_PCT
+
+    return (result.moved_px is None and result.extra_pct >= MOSTLY_EXTRA_RATIO * result.missing_pct
+            and rising(result) and any(rising(r) for r in others))
 
 
 #: A coarse growth reading counts in decide only from a view that read the part rising this much (%) at its
@@ -528,7 +578,10 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       part found elsewhere: the part moved; extra material four times the threshold); extra material
       alone that appeared at once (``extra_before``: each camera's extra at its previous check) in one
       camera of a stereo pair (``pairs``) whose partner passes and sees none does not count
-      (:func:`unseen_by_partner`); views read against a relit background (``ShapeResult.relit``) count only
+      (:func:`unseen_by_partner`), nor does extra material that every other usable view passes without seeing any of
+      (not decisive with the newest band within its threshold, or decisive with three times as much extra as missing
+      material while this view and another read the part rising: :func:`unseen_by_the_other_views`);
+      views read against a relit background (``ShapeResult.relit``) count only
       alongside a failing view that was not (in no share of views, nor for loose material or a layer shift),
     * while the part visibly grows (median growth >= 50 %), a camera failing on missing material
       alone does not count (a face the colour of what lies behind it looks missing); nor does missing
@@ -669,6 +722,12 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     # is sometimes seen by one camera of a pair only), and a pair with one usable camera is a single view.
     extra_before = extra_before or {}
     failing = [r for r in failing if not unseen_by_partner(r, usable, pairs, extra_before.get(r.camera))]
+    # ... nor does extra material that no other view sees in any amount while they all pass (not decisive, its newest
+    # band fitting; or decisive, mostly extra, while it and another view read the part rising): material on the bed
+    # shows in a second view; the failing view's own outline or background frame does not
+    unseen = {r.camera for r in failing if unseen_by_the_other_views(r, usable)}
+    failing = [r for r in failing if r.camera not in unseen]
+    decisive = [r for r in decisive if r.camera not in unseen]
     # A view read against a relit background (``ShapeResult.relit``: a reflection swept across a glossy bed) guesses
     # the light under the part from the bed around it; where the reflection crosses the part it reads lit bed as
     # material (extra where there is none, or a missing top as there). It corroborates a view that was not

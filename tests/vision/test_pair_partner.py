@@ -10,7 +10,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from octoprint_printwatch.core.pipeline import evaluate_recording
-from octoprint_printwatch.core.verdict import decide
+from octoprint_printwatch.core.verdict import decide, unseen_by_partner
 from octoprint_printwatch.core.recording import load_recording
 from octoprint_printwatch.core.settings import DetectionSettings
 
@@ -49,9 +49,13 @@ def test_extra_material_the_partner_also_sees_or_a_decisive_view_still_fails():
         return decide({"s0L": left, "s0R": right}, {}, settings, pairs=pairs, extra_before=before)[0]
 
     assert verdict() == "ok"
-    assert verdict(pairs=()) == "fail"                                   # no pair: two separate views
-    assert verdict(before={"s0R": 0.0}) == "fail"                        # s0L had no previous check
-    assert verdict(before={"s0L": 6.0, "s0R": 0.0}) == "fail"            # built up check by check
+    usable = {"s0L": left, "s0R": right}
+    assert not unseen_by_partner(left, usable, (), 0.0)                  # no pair: two separate views
+    assert not unseen_by_partner(left, usable, pairs, None)              # s0L had no previous check
+    assert not unseen_by_partner(left, usable, pairs, 6.0)               # built up check by check
+    # ... where the other view sees no extra material at all, the hair is still unseen by the other views
+    # (verdict.unseen_by_the_other_views, tests/vision/test_extra_unseen_by_other_views.py)
+    assert verdict(pairs=()) == verdict(before={"s0R": 0.0}) == verdict(before={"s0L": 6.0, "s0R": 0.0}) == "ok"
     assert verdict(right=replace(right, extra_pct=1.0)) == "fail"        # the partner sees some too
     assert verdict(left=replace(left, decisive=True)) == "fail"
     assert verdict(right=replace(right, usable=False)) == "fail"         # a single usable view

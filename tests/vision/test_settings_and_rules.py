@@ -1,4 +1,6 @@
 """DetectionSettings, the seed's rule, and the combined decision rule."""
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -89,8 +91,9 @@ def test_missing_alone_from_one_camera_of_two_does_not_pause_a_growing_part():
     assert decide({"a": figures("a", missing=12.0, growth=30.0),
                    "b": figures("b", missing=9.0, growth=40.0)}, {}, s)[0] == "fail"
     assert decide({"a": figures("a", missing=12.0)}, {}, s)[0] == "fail"
-    # missing AND extra material (the part moved) from one camera is enough
-    assert decide({"a": figures("a", missing=8.0, extra=8.0), "b": figures("b")}, {}, s)[0] == "fail"
+    # missing AND extra material (the part moved: decisive, as check_shape marks it) from one camera is enough
+    moved = replace(figures("a", missing=8.0, extra=8.0), decisive=True)
+    assert decide({"a": moved, "b": figures("b")}, {}, s)[0] == "fail"
 
 
 def test_a_stall_needs_the_newest_layers_missing_in_a_view_that_saw_no_rise():
