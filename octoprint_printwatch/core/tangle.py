@@ -31,7 +31,7 @@ import cv2
 import numpy as np
 
 from .layer_shift import count_viewpoints
-from .masks import components, dilate, disk, outline_zone, reaching_in_from_above
+from .masks import components, dilate, disk, outline_zone, reaching_in_from_above, upper_profile
 
 #: New material closer than this to the expected silhouette (mm at the part) is not counted: the residual
 #: calibration error (1 %, 0.5 deg, 1 mm) leaves a part's edge up to about a millimetre outside its outline.
@@ -136,6 +136,7 @@ def new_material(
     foreign: np.ndarray | None = None,
     part_in_place: bool = False,
     placed_before: np.ndarray | None = None,
+    risen: np.ndarray | None = None,
 ) -> NewMaterial | None:
     """Material seen now and not at the previous check, outside the expected part and attached to it.
 
@@ -169,6 +170,9 @@ def new_material(
         part may stand at either place, and where the outline jumped since, the part's newest band lies beyond this
         check's outline (new since then, far from it) though it is the part's. Material is counted beyond both (the
         pixels near that placement are taken away at the end; which blobs count is judged as without it).
+    risen : (h, w) bool or None, where the part's top this camera saw at the previous check stands once risen by
+        the model's rise since (:func:`risen_top`): the part's newest band, though beyond an outline the calibration
+        error laid off the part. Its pixels are taken away at the end, as ``placed_before``'s.
     Returns None when the test cannot be made (no scale, no previous mask, empty expected part).
     """
     if px_per_mm <= 0 or previous is None or previous.shape != observed.shape or not expected.any():
@@ -226,6 +230,9 @@ def new_material(
         beyond_before = beyond(placed_before, tol, min_distance_mm * px_per_mm)
         counted &= beyond_before
         foot &= beyond_before
+    if risen is not None and risen.shape == expected.shape:
+        counted &= ~risen
+        foot &= ~risen
     pixels = int(counted.sum())
     foot_pixels = int(np.count_nonzero(foot)) if at_foot.any() else 0
     blobs = int(len(np.unique(labels[counted]))) if pixels else 0
@@ -234,6 +241,34 @@ def new_material(
                        # (the loops at the foot alone: what lies beyond the zone counts already, and a glass bed's
                        # mirror image of a growing part spreads below it over half the circle, s7 021_detach)
                        arc_deg=arc_around(foot, expected, scale))
+
+
+def risen_top(seen_before: np.ndarray, expected: np.ndarray, before: np.ndarray, reach: float,
+              tolerance: float) -> np.ndarray:
+    """(h, w) bool: where the part's top that the camera saw at its previous check (``seen_before``) stands now,
+    raised by the model's rise since (``before`` -> ``expected``, the silhouettes then and now laid as this check's
+    outline; the largest rise of their tops, as in the bed-marks test) and grown by ``tolerance``.
+
+    The calibration error is the same at both checks: where the camera saw the part's top a few px beyond the outline
+    then (the outline laid low or aside, within ``reach``, the alignment's bound), the newest layers stand as far
+    beyond it now, new since then and more than 2 mm beyond the outline at every check. Only the seen top of each
+    column standing within ``reach`` of the outline then counts (strands seen higher are no top), and only the
+    rise the model gives: loops lie higher, down the sides and around the foot."""
+    none = np.zeros(expected.shape, bool)
+    if not (seen_before.any() and expected.any() and before.any()):
+        return none
+    now, then = upper_profile(expected), upper_profile(before)
+    both = ~np.isnan(now) & ~np.isnan(then)
+    if not both.any():
+        return none
+    rise = int(np.ceil(max(float(np.max(then[both] - now[both])), 0.0) + tolerance))
+    seen_top = upper_profile(seen_before & dilate(before, reach))
+    columns = ~np.isnan(seen_top)
+    rows = np.arange(expected.shape[0], dtype=np.float32)[:, None]
+    top = np.where(columns, seen_top, np.nan)[None, :]
+    with np.errstate(invalid="ignore"):
+        band = columns[None, :] & (rows >= top - rise) & (rows <= top)
+    return dilate(band, tolerance)
 
 
 #: New material (mm^2 at the part) that fails the print when two views see at least this much each...
