@@ -247,13 +247,14 @@ def risen_top(seen_before: np.ndarray, expected: np.ndarray, before: np.ndarray,
               tolerance: float) -> np.ndarray:
     """(h, w) bool: where the part's top that the camera saw at its previous check (``seen_before``) stands now,
     raised by the model's rise since (``before`` -> ``expected``, the silhouettes then and now laid as this check's
-    outline; the largest rise of their tops, as in the bed-marks test) and grown by ``tolerance``.
+    outline; the median rise of their tops) and grown by ``tolerance``.
 
     The calibration error is the same at both checks: where the camera saw the part's top a few px beyond the outline
     then (the outline laid low or aside, within ``reach``, the alignment's bound), the newest layers stand as far
-    beyond it now, new since then and more than 2 mm beyond the outline at every check. Only the seen top of each
-    column standing within ``reach`` of the outline then counts (strands seen higher are no top), and only the
-    rise the model gives: loops lie higher, down the sides and around the foot."""
+    beyond it now, new since then and more than 2 mm beyond the outline at every check. Only the part's top counts:
+    the columns of the outline then (grown by the tolerance), where the seen top stands at most ``reach`` above it
+    (strands seen higher are no top; beside the outline a brim, a skirt or a shadow is), and only the rise the model
+    gives: loops lie higher, down the sides and around the foot."""
     none = np.zeros(expected.shape, bool)
     if not (seen_before.any() and expected.any() and before.any()):
         return none
@@ -261,13 +262,17 @@ def risen_top(seen_before: np.ndarray, expected: np.ndarray, before: np.ndarray,
     both = ~np.isnan(now) & ~np.isnan(then)
     if not both.any():
         return none
-    rise = int(np.ceil(max(float(np.max(then[both] - now[both])), 0.0) + tolerance))
+    rise = float(np.median(then[both] - now[both]))
+    if rise <= 0:
+        return none
     seen_top = upper_profile(seen_before & dilate(before, reach))
-    columns = ~np.isnan(seen_top)
+    outline_top = upper_profile(dilate(before, tolerance))
+    columns = ~np.isnan(seen_top) & ~np.isnan(outline_top)
+    columns[columns] = seen_top[columns] >= outline_top[columns] - reach
     rows = np.arange(expected.shape[0], dtype=np.float32)[:, None]
     top = np.where(columns, seen_top, np.nan)[None, :]
     with np.errstate(invalid="ignore"):
-        band = columns[None, :] & (rows >= top - rise) & (rows <= top)
+        band = columns[None, :] & (rows >= top - rise - tolerance) & (rows <= top)
     return dilate(band, tolerance)
 
 
