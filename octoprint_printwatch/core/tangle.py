@@ -243,11 +243,15 @@ def new_material(
                        arc_deg=arc_around(foot, expected, scale))
 
 
+#: px the risen top is grown by (:func:`risen_top`).
+RISEN_SLACK_PX = 1.0
+
+
 def risen_top(seen_before: np.ndarray, expected: np.ndarray, before: np.ndarray, reach: float,
               tolerance: float) -> np.ndarray:
     """(h, w) bool: where the part's top that the camera saw at its previous check (``seen_before``) stands now,
     raised by the model's rise since (``before`` -> ``expected``, the silhouettes then and now laid as this check's
-    outline; the median rise of their tops) and grown by ``tolerance``.
+    outline; each column's rise of their tops) and grown by a pixel.
 
     The calibration error is the same at both checks: where the camera saw the part's top a few px beyond the outline
     then (the outline laid low or aside, within ``reach``, the alignment's bound), the newest layers stand as far
@@ -262,18 +266,19 @@ def risen_top(seen_before: np.ndarray, expected: np.ndarray, before: np.ndarray,
     both = ~np.isnan(now) & ~np.isnan(then)
     if not both.any():
         return none
-    rise = float(np.median(then[both] - now[both]))
-    if rise <= 0:
-        return none
+    # each column's own rise; beside the outlines (a part seen a few px aside), the median's
+    rise = np.where(both, then - now, float(np.median(then[both] - now[both])))
     seen_top = upper_profile(seen_before & dilate(before, reach))
     outline_top = upper_profile(dilate(before, tolerance))
-    columns = ~np.isnan(seen_top) & ~np.isnan(outline_top)
+    columns = ~np.isnan(seen_top) & ~np.isnan(outline_top) & (rise > 0)
     columns[columns] = seen_top[columns] >= outline_top[columns] - reach
     rows = np.arange(expected.shape[0], dtype=np.float32)[:, None]
     top = np.where(columns, seen_top, np.nan)[None, :]
     with np.errstate(invalid="ignore"):
-        band = columns[None, :] & (rows >= top - rise - tolerance) & (rows <= top)
-    return dilate(band, tolerance)
+        band = columns[None, :] & (rows >= top - rise[None, :]) & (rows <= top)
+    # (a pixel's step: the top is read to the pixel at both checks; no tolerance more, or a layer shift's band,
+    # raised along the line of sight just past the outline's ring, would be taken for the part's rise)
+    return dilate(band, RISEN_SLACK_PX)
 
 
 #: New material (mm^2 at the part) that fails the print when two views see at least this much each...
