@@ -256,8 +256,9 @@ def risen_top(seen_before: np.ndarray, expected: np.ndarray, before: np.ndarray,
     The calibration error is the same at both checks: where the camera saw the part's top a few px beyond the outline
     then (the outline laid low or aside, within ``reach``, the alignment's bound), the newest layers stand as far
     beyond it now, new since then and more than 2 mm beyond the outline at every check. Only the part's top counts:
-    the columns of the outline then (grown by the tolerance), where the seen top stands at most ``reach`` above it
-    (strands seen higher are no top; beside the outline a brim, a skirt or a shadow is), and only the rise the model
+    the columns of the outline then (grown by the tolerance), where the seen top stands at most ``reach`` above its
+    top and no more than ``tolerance`` below it (strands seen higher are no top; a lower one is the part's side, a
+    skirt or the foot), and only the rise the model
     gives: loops lie higher, down the sides and around the foot."""
     none = np.zeros(expected.shape, bool)
     if not (seen_before.any() and expected.any() and before.any()):
@@ -271,7 +272,10 @@ def risen_top(seen_before: np.ndarray, expected: np.ndarray, before: np.ndarray,
     seen_top = upper_profile(seen_before & dilate(before, reach))
     outline_top = upper_profile(dilate(before, tolerance))
     columns = ~np.isnan(seen_top) & ~np.isnan(outline_top) & (rise > 0)
-    columns[columns] = seen_top[columns] >= outline_top[columns] - reach
+    # (the part's top: at or above the outline's, within the bound; a lower top beside the outline is its side, the
+    # skirt or the foot, and raised it would cover a layer shift's band sticking out there)
+    columns[columns] = ((seen_top[columns] >= outline_top[columns] - reach)
+                        & (seen_top[columns] <= outline_top[columns] + tolerance))
     rows = np.arange(expected.shape[0], dtype=np.float32)[:, None]
     top = np.where(columns, seen_top, np.nan)[None, :]
     with np.errstate(invalid="ignore"):

@@ -61,3 +61,10 @@ def test_a_strand_seen_beyond_the_alignment_bound_lifts_nothing():
 def test_no_look_before_or_no_rise_lifts_nothing():
     assert not risen(np.zeros((H, W), bool)).any()
     assert not risen_top(SEEN_THEN, OUTLINE_NOW, np.zeros((H, W), bool), REACH, TOL).any()
+
+
+def test_a_lower_top_beside_the_outline_lifts_nothing():
+    # beside the outline then (within its tolerance) the camera saw only the part's foot: no top of the part there
+    foot = Box(PART.x1, PART.y1 - 6, PART.x1 + 2, PART.y1).mask()
+    band = risen(SEEN_THEN | foot)
+    assert not band[:PART.y1 - 6 - 2, PART.x1 + 2:PART.x1 + 3].any()
