@@ -172,7 +172,8 @@ def new_material(
         pixels near that placement are taken away at the end; which blobs count is judged as without it).
     risen : (h, w) bool or None, where the part's top this camera saw at the previous check stands once risen by
         the model's rise since (:func:`risen_top`): the part's newest band, though beyond an outline the calibration
-        error laid off the part. Its pixels are taken away at the end, as ``placed_before``'s.
+        error laid off the part. Its pixels are taken away at the end, as ``placed_before``'s, beyond the bed-marks
+        zone only.
     Returns None when the test cannot be made (no scale, no previous mask, empty expected part).
     """
     if px_per_mm <= 0 or previous is None or previous.shape != observed.shape or not expected.any():
@@ -231,8 +232,9 @@ def new_material(
         counted &= beyond_before
         foot &= beyond_before
     if risen is not None and risen.shape == expected.shape:
+        # (not at the foot: there a short part's top and its layer shift's band lie together, and the zone's blobs
+        # count only where two sides see them)
         counted &= ~risen
-        foot &= ~risen
     pixels = int(counted.sum())
     foot_pixels = int(np.count_nonzero(foot)) if at_foot.any() else 0
     blobs = int(len(np.unique(labels[counted]))) if pixels else 0

@@ -68,3 +68,13 @@ def test_a_lower_top_beside_the_outline_lifts_nothing():
     foot = Box(PART.x1, PART.y1 - 6, PART.x1 + 2, PART.y1).mask()
     band = risen(SEEN_THEN | foot)
     assert not band[:PART.y1 - 6 - 2, PART.x1 + 2:PART.x1 + 3].any()
+
+
+def test_the_bed_marks_zone_keeps_its_blobs():
+    # a short part's top and its shifted band lie in the bed-marks zone together: the zone's blobs are not taken away
+    now = PART.mask()
+    marks = np.zeros((H, W), bool)
+    marks[:PART.y0 + LOW_PX, :] = True
+    alone = measure(now, SEEN_THEN, marks=marks)
+    assert alone.at_foot_mm2 > 0.0
+    assert measure(now, SEEN_THEN, marks=marks, risen=risen()).at_foot_mm2 == alone.at_foot_mm2
