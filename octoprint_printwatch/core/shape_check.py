@@ -34,7 +34,7 @@ import numpy as np
 
 from .camera import Camera
 from .layer_shift import BandShift, band_shift, stretched
-from .tangle import NewMaterial, new_material
+from .tangle import NewMaterial, new_material, risen_top
 from .nest import STALL_READ_BELOW_GROWTH_PCT, part_coverage, region_texture
 from .alignment import (align_candidates, align_expected, displaced_part, near_any, outline_candidate,
                         outline_on_edges)
@@ -835,9 +835,11 @@ def check_shape(
         # error is the same at both, so the part may stand at either place, and its newest band, seen beyond this
         # check's outline, is no strand)
         placed_before = (shift_mask(expected, *shift_before) if outline_jumped(shift_before, (dx, dy), tol) else None)
+        # (the part's top seen then, risen by the model's rise since: its newest band, wherever the outline lies)
+        risen = risen_top(seen_before, expected_a, before_a, shift_bound, tol) if rise_readable else None
         new_outside = new_material(observed, seen_before, expected_a, search_a, tol, regions.px_per_mm,
                                    ignore=reflection_a, marks=dont_care_a, linked=~evidence.bed,
-                                   placed_before=placed_before,
+                                   placed_before=placed_before, risen=risen,
                                    bed_to_image=regions.bed_to_image,
                                    not_the_prints=or_lying_on_rods(not_part_colour, on_rods),
                                    # (compare_masks' objects from above, on the same masks: the same

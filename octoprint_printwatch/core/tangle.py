@@ -31,7 +31,7 @@ import cv2
 import numpy as np
 
 from .layer_shift import count_viewpoints
-from .masks import components, dilate, disk, outline_zone, reaching_in_from_above
+from .masks import components, dilate, disk, outline_zone, reaching_in_from_above, upper_profile
 
 #: New material closer than this to the expected silhouette (mm at the part) is not counted: the residual
 #: calibration error (1 %, 0.5 deg, 1 mm) leaves a part's edge up to about a millimetre outside its outline.
@@ -136,6 +136,7 @@ def new_material(
     foreign: np.ndarray | None = None,
     part_in_place: bool = False,
     placed_before: np.ndarray | None = None,
+    risen: np.ndarray | None = None,
 ) -> NewMaterial | None:
     """Material seen now and not at the previous check, outside the expected part and attached to it.
 
@@ -169,6 +170,10 @@ def new_material(
         part may stand at either place, and where the outline jumped since, the part's newest band lies beyond this
         check's outline (new since then, far from it) though it is the part's. Material is counted beyond both (the
         pixels near that placement are taken away at the end; which blobs count is judged as without it).
+    risen : (h, w) bool or None, where the part's top this camera saw at the previous check stands once risen by
+        the model's rise since (:func:`risen_top`): the part's newest band, though beyond an outline the calibration
+        error laid off the part. Its pixels are taken away at the end, as ``placed_before``'s, beyond the bed-marks
+        zone only.
     Returns None when the test cannot be made (no scale, no previous mask, empty expected part).
     """
     if px_per_mm <= 0 or previous is None or previous.shape != observed.shape or not expected.any():
@@ -226,6 +231,10 @@ def new_material(
         beyond_before = beyond(placed_before, tol, min_distance_mm * px_per_mm)
         counted &= beyond_before
         foot &= beyond_before
+    if risen is not None and risen.shape == expected.shape:
+        # (not at the foot: there a short part's top and its layer shift's band lie together, and the zone's blobs
+        # count only where two sides see them)
+        counted &= ~risen
     pixels = int(counted.sum())
     foot_pixels = int(np.count_nonzero(foot)) if at_foot.any() else 0
     blobs = int(len(np.unique(labels[counted]))) if pixels else 0
@@ -234,6 +243,48 @@ def new_material(
                        # (the loops at the foot alone: what lies beyond the zone counts already, and a glass bed's
                        # mirror image of a growing part spreads below it over half the circle, s7 021_detach)
                        arc_deg=arc_around(foot, expected, scale))
+
+
+#: px the risen top is grown by (:func:`risen_top`).
+RISEN_SLACK_PX = 1.0
+
+
+def risen_top(seen_before: np.ndarray, expected: np.ndarray, before: np.ndarray, reach: float,
+              tolerance: float) -> np.ndarray:
+    """(h, w) bool: where the part's top that the camera saw at its previous check (``seen_before``) stands now,
+    raised by the model's rise since (``before`` -> ``expected``, the silhouettes then and now laid as this check's
+    outline; each column's rise of their tops) and grown by a pixel.
+
+    The calibration error is the same at both checks: where the camera saw the part's top a few px beyond the outline
+    then (the outline laid low or aside, within ``reach``, the alignment's bound), the newest layers stand as far
+    beyond it now, new since then and more than 2 mm beyond the outline at every check. Only the part's top counts:
+    the columns of the outline then (grown by the tolerance), where the seen top stands at most ``reach`` above its
+    top and no more than ``tolerance`` below it (strands seen higher are no top; a lower one is the part's side, a
+    skirt or the foot), and only the rise the model
+    gives: loops lie higher, down the sides and around the foot."""
+    none = np.zeros(expected.shape, bool)
+    if not (seen_before.any() and expected.any() and before.any()):
+        return none
+    now, then = upper_profile(expected), upper_profile(before)
+    both = ~np.isnan(now) & ~np.isnan(then)
+    if not both.any():
+        return none
+    # each column's own rise; beside the outlines (a part seen a few px aside), the median's
+    rise = np.where(both, then - now, float(np.median(then[both] - now[both])))
+    seen_top = upper_profile(seen_before & dilate(before, reach))
+    outline_top = upper_profile(dilate(before, tolerance))
+    columns = ~np.isnan(seen_top) & ~np.isnan(outline_top) & (rise > 0)
+    # (the part's top: at or above the outline's, within the bound; a lower top beside the outline is its side, the
+    # skirt or the foot, and raised it would cover a layer shift's band sticking out there)
+    columns[columns] = ((seen_top[columns] >= outline_top[columns] - reach)
+                        & (seen_top[columns] <= outline_top[columns] + tolerance))
+    rows = np.arange(expected.shape[0], dtype=np.float32)[:, None]
+    top = np.where(columns, seen_top, np.nan)[None, :]
+    with np.errstate(invalid="ignore"):
+        band = columns[None, :] & (rows >= top - rise[None, :]) & (rows <= top)
+    # (a pixel's step: the top is read to the pixel at both checks; no tolerance more, or a layer shift's band,
+    # raised along the line of sight just past the outline's ring, would be taken for the part's rise)
+    return dilate(band, RISEN_SLACK_PX)
 
 
 #: New material (mm^2 at the part) that fails the print when two views see at least this much each...
