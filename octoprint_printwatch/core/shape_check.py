@@ -266,8 +266,9 @@ BAND_INSIDE_MAX_SHARE = 0.05
 
 
 def inside_the_older_layers(band: np.ndarray, older: np.ndarray, tol: float) -> bool:
-    """Whether the newest ``band`` lies inside the ``older`` layers' outline in this view (BAND_INSIDE_MAX_SHARE): a move
-    of it can then show only as material past the older layers' edge, never as bed where it stood. Both (h, w) bool."""
+    """Whether the newest ``band`` lies inside the ``older`` layers' outline in this view (BAND_INSIDE_MAX_SHARE): a
+    move of it can then show only as material past the older layers' edge, never as bed where it stood. Both (h, w)
+    bool."""
     total = int(np.count_nonzero(band))
     return total > 0 and np.count_nonzero(band & ~dilate(older, tol)) <= BAND_INSIDE_MAX_SHARE * total
 
@@ -275,15 +276,20 @@ def inside_the_older_layers(band: np.ndarray, older: np.ndarray, tol: float) -> 
 def standing_material(observed: np.ndarray, last_look: np.ndarray | None,
                       look_before: np.ndarray | None) -> np.ndarray | None:
     """(h, w) bool: material seen now that this camera also saw at each of its two looks before (``last_look``, the
-    previous check's, and ``look_before``, the one before it), or None without both. The layers printed since the
-    previous check did not exist at either look: a band moved sideways can stick out onto such material only where
-    something else already stood (the older layers' own outline misfit, a shadow, the parked hotend), so it is no
-    evidence of the move either way. (Two looks, not one: the first check after a shift's onset sees its newest
-    top land where the onset check's shifted top already stood.)"""
-    if last_look is None or look_before is None or last_look.shape != observed.shape \
-            or look_before.shape != observed.shape:
+    previous check's, and ``look_before``, the one before it; both (h, w) bool as ``observed``), or None without both.
+    The layers printed since the previous check did not exist at either look: a band moved sideways can stick out onto
+    such material only where something else already stood (the older layers' own outline misfit, a shadow, the parked
+    hotend), so it is no evidence of the move either way. (Two looks, not one: the first check after a shift's onset
+    sees its newest top land where the onset check's shifted top already stood.)"""
+    if last_look is None or look_before is None:
         return None
     return observed & last_look & look_before
+
+
+def cropped(mask: np.ndarray | None, frame_shape: tuple[int, int], crop: tuple[slice, slice]) -> np.ndarray | None:
+    """``mask`` (a full frame's, from an earlier check) cut to ``crop``, or None without one or where it has another
+    shape than ``frame_shape`` (the camera's resolution changed since)."""
+    return mask[crop] if mask is not None and mask.shape == frame_shape else None
 
 
 def _not_a_mark(observed: np.ndarray, last_observed: np.ndarray, expected: np.ndarray, previous: np.ndarray,
@@ -661,9 +667,7 @@ def check_shape(
     distance = cv2.distanceTransform((~expected).astype(np.uint8), cv2.DIST_L2, 3)
     prior = distance <= shift_bound + tol + 1
     bed_sample = (distance > shift_bound + 2 * tol + 4) & ~dont_care
-    previous = None
-    if previous_mask is not None and previous_mask.shape == (h, w):
-        previous = previous_mask[crop]
+    previous = cropped(previous_mask, (h, w), crop)
 
     evidence = material_evidence(background[crop], frame[crop], prior, bed_sample,
                                  material_factor=material_factor, bed_factor=bed_factor, previous=previous,
@@ -756,7 +760,7 @@ def check_shape(
     # alignment errors cancel; a part that stopped growing (runout, clog, spaghetti) shows none of the
     # new band, even where the band is a thin crescent the absolute comparison cannot resolve.
     # the previous check's material mask (None: no usable look before) and the model's silhouette then
-    seen_before = last_observed[crop] if last_observed is not None and last_observed.shape == (h, w) else None
+    seen_before = cropped(last_observed, (h, w), crop)
     previous_silhouette = (regions.previous_silhouette[crop].astype(bool)
                            if regions.previous_silhouette is not None else None)
     before_a = shift_mask(previous_silhouette, dx, dy) if previous_silhouette is not None else None
@@ -801,8 +805,7 @@ def check_shape(
                 # the band can show a move only where it would stick out past the older layers' edge, where their
                 # own misfit stands: material seen there at both looks before is no evidence of the move
                 standing = standing_material(observed, seen_before,
-                                             older_looks[0][0][crop]
-                                             if older_looks and older_looks[0][0].shape == (h, w) else None)
+                                             cropped(older_looks[0][0], (h, w), crop) if older_looks else None)
                 if standing is not None:
                     marks = marks | standing
             shift_observed, shift_bed, marks = shift_evidence_without_rods(observed, bed_evidence, marks,

@@ -260,8 +260,7 @@ def risen_top(seen_before: np.ndarray, expected: np.ndarray, before: np.ndarray,
     beyond it now, new since then and more than 2 mm beyond the outline at every check. Only the part's top counts:
     the columns of the outline then (grown by the tolerance), where the seen top stands at most ``reach`` above its
     top and no more than ``tolerance`` below it (strands seen higher are no top; a lower one is the part's side, a
-    skirt or the foot), and only the rise the model
-    gives: loops lie higher, down the sides and around the foot."""
+    skirt or the foot), and only the rise the model gives: loops lie higher, down the sides and around the foot."""
     none = np.zeros(expected.shape, bool)
     if not (seen_before.any() and expected.any() and before.any()):
         return none
