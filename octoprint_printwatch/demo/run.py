@@ -339,16 +339,17 @@ def watch_print(server, timeout: float, say: Callable[[str], None]) -> tuple[str
             say("  " + describe(check_line(check)))
         seen = max(seen, len(checks))
         if started and not state.startswith(RUNNING_STATES):
-            # the plugin lifts the hold before it stores the verdict: a check at the very last layer can
-            # still be finishing when the job ends
-            settle = time.monotonic() + 30.0
-            while status.get("state") == "checking" and time.monotonic() < settle:
-                time.sleep(0.3)
-                status = server.get(f"{API}/status")
             if print_id is None:
                 prints = server.get(f"{API}/prints").get("prints") or []
                 print_id = prints[0]["id"] if prints else None
-            final = server.get(f"{API}/prints/{print_id}")["checks"] if print_id else checks
+            # the plugin lifts the hold before it stores the verdict and closes the print after the
+            # check it is storing: a print whose result is no longer "running" holds every check
+            final = server.get(f"{API}/prints/{print_id}") if print_id else {"checks": checks}
+            settle = time.monotonic() + 30.0
+            while final.get("result") == "running" and state != "Paused" and time.monotonic() < settle:
+                time.sleep(0.3)
+                final = server.get(f"{API}/prints/{print_id}")
+            final = final["checks"]
             for check in final[seen:]:
                 say("  " + describe(check_line(check)))
             return state, final

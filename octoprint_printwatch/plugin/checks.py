@@ -174,6 +174,15 @@ class CheckCoordinator:
             self.state = "idle"
         if job is None:
             return
+        # A check whose hold was released may still be storing when the job ends (the last check sits
+        # close to the end of the file): the single worker closes the print after it, so a finished
+        # print's history always holds every check it ran.
+        try:
+            self._worker.submit(self._close_print, job, result)
+        except RuntimeError:  # executor shut down (OctoPrint stopping)
+            self._close_print(job, result)
+
+    def _close_print(self, job: JobContext, result: str) -> None:
         self.history.end_print(job.print_id, result)
         values = self._settings()
         if not values.get("recording_enabled", True):

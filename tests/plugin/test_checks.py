@@ -142,6 +142,35 @@ def test_a_passing_check_holds_then_releases_and_is_stored(make):
     assert coordinator.status()["next_check"] == {"layer": 40, "z": 8.0}
 
 
+def test_a_print_ending_right_after_its_last_check_keeps_that_check(make):
+    # The last check sits near the end of the file: once its hold lifts, the print may finish
+    # while the check is still being stored (here: a slow disk). The finished print must hold it.
+    coordinator, printer, runner, events, pushes = make([MemoryCamera("cam0"), MemoryCamera("cam1")], ["ok"])
+    history = coordinator.history
+    stored = threading.Event()
+    add_check = history.add_check
+
+    def slow_add_check(print_id, check):
+        time.sleep(0.5)
+        add_check(print_id, check)
+        stored.set()
+
+    history.add_check = slow_add_check
+    print_id = coordinator.job.print_id
+    coordinator.on_marker("PRINTWATCH_CHECK", "layer=20 z=4.0")
+    deadline = time.monotonic() + 5
+    while "release" not in printer.calls and time.monotonic() < deadline:
+        time.sleep(0.005)
+    coordinator.end_print("done")  # the job ended as soon as the hold lifted
+    assert coordinator.status()["state"] == "idle"
+    deadline = time.monotonic() + 5
+    while history.get_print(print_id)["result"] != "done" and time.monotonic() < deadline:
+        time.sleep(0.01)
+    ended = history.get_print(print_id)
+    assert ended["result"] == "done" and stored.is_set()
+    assert [c["layer"] for c in ended["checks"]] == [20]
+
+
 def test_a_failure_pauses_before_the_hold_is_lifted_and_says_why(make):
     coordinator, printer, runner, events, pushes = make([MemoryCamera("cam0")], ["fail"], calibrated=("cam0",))
     coordinator.on_marker("PRINTWATCH_CHECK", "layer=40 z=8.0")

@@ -26,9 +26,16 @@ API = "/plugin/printwatch"
 
 
 def print_detail(server, print_id=None):
+    """The print's history entry once PrintWatch has closed it (a moment after OctoPrint's own state)."""
     prints = server.get(f"{API}/prints")["prints"]
     assert prints, "no print in the history"
-    return server.get(f"{API}/prints/{print_id or prints[0]['id']}")
+    url = f"{API}/prints/{print_id or prints[0]['id']}"
+
+    def settled():
+        detail = server.get(url)
+        return detail if detail["result"] != "running" else None
+
+    return server.wait_for(settled, 30, "PrintWatch to close the print in its history")
 
 
 def test_normal_print_completes_with_every_check_passing(tmp_path):
