@@ -825,9 +825,11 @@ def was_there_before(shift: LayerShift) -> bool:
     an alignment slip of the whole part, not layers that slid since. A real shift has a check without it
     just before its onset, so this hides only one left unconfirmed for four checks. Also where the last three
     showed it and a height error explained each of them (:func:`_offset_held_by_the_null`), or where none of the
-    last four read it clearly absent (:func:`_partly_there_all_along`)."""
+    last four read it clearly absent (:func:`_partly_there_all_along`), or where the two checks before the previous one
+    read it partly but not clearly (:func:`_grown_into_view`: an outline's offset that grew into view with the part)."""
     return ((len(shift.before) >= 3 and all(_was_there(e) for e in shift.before))
-            or _offset_held_by_the_null(shift) or _partly_there_all_along(shift))
+            or _offset_held_by_the_null(shift) or _partly_there_all_along(shift)
+            or _grown_into_view(shift))
 
 
 #: A reading of a shift at this share or more of the pixels it changes does not read it clearly absent, and a shift
@@ -860,6 +862,26 @@ def _partly_there_all_along(shift: LayerShift) -> bool:
     readings = shift.before[:SHIFT_PARTLY_THERE_CHECKS]
     return (len(readings) == SHIFT_PARTLY_THERE_CHECKS
             and all(e is not None and e.confirmed >= SHIFT_PARTLY_THERE for e in readings))
+
+
+#: The checks before the previous one that must each read a shift partly, never clearly (SHIFT_PARTLY_THERE up to
+#: SHIFT_WAS_NOT_THERE), for it to have grown into view with the part (_grown_into_view).
+SHIFT_GROWN_INTO_VIEW_CHECKS = 2
+
+
+def _grown_into_view(shift: LayerShift) -> bool:
+    """Whether each of the SHIFT_GROWN_INTO_VIEW_CHECKS checks before the previous one read this shift partly, but
+    not clearly (SHIFT_PARTLY_THERE up to SHIFT_WAS_NOT_THERE): an offset that grew into view over checks. A view whose
+    outline lies a few px off the part (a first look on a brim of the part's colour fits it anywhere along the brim,
+    and the anchor then holds it) cannot show that while the part stands inside the brim or the bed-marks zone around
+    its foot; as the part rises out of it, more of the offset shows at each check, and the newest band, tested against
+    the outline, reads as moved by it (cross-check seed 27 `029_detach` s0, the outline 6 px beside the part: 0.44,
+    0.46, 0.85, then 0.94 before any failure). Layers that slid are a step in time: clearly absent before the onset
+    (SHIFT_PARTLY_THERE), fully there after it, and only the onset check's band, just before the first catch, reads
+    them partly."""
+    readings = shift.before[1:1 + SHIFT_GROWN_INTO_VIEW_CHECKS]
+    return (len(readings) == SHIFT_GROWN_INTO_VIEW_CHECKS
+            and all(e is not None and SHIFT_PARTLY_THERE <= e.confirmed < SHIFT_WAS_NOT_THERE for e in readings))
 
 
 def there_since_first_check(shift: LayerShift) -> bool:
