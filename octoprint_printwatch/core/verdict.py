@@ -98,13 +98,20 @@ def sees_nothing_extra(result: ShapeResult) -> bool:
             and (new is None or new.with_foot_mm2 < TWO_VIEWS_MM2))
 
 
+def rise_since_previous_check(result: ShapeResult) -> float | None:
+    """A view's reading of the rise since its previous check (% of the expected): fine, else read to the pixel
+    (``coarse_growth_pct``, a part seen small); None: neither. A reading over a span of checks is left out: it
+    reaches back to checks before whatever happened since."""
+    return result.growth_pct if result.growth_pct is not None else result.coarse_growth_pct
+
+
 def unseen_by_the_other_views(result: ShapeResult, usable: Mapping[str, ShapeResult]) -> bool:
     """True when ``result`` fails on extra material (more than half its missing material) that every other ``usable``
-    view, at least one of them not read against a relit background, does not see at all (:func:`sees_nothing_extra`):
+    view not read against a relit background (at least one) does not see at all (:func:`sees_nothing_extra`):
     when that extra material is not decisive and the newest band is within its threshold, or when it is decisive
     (four times the threshold, or with missing material) but ``MOSTLY_EXTRA_RATIO`` times the missing material, the
     part not found whole elsewhere, while this view, not relit, and another view not relit read the part rising as the
-    model says.
+    model says since their previous check (:func:`rise_since_previous_check`: fine, or to the pixel).
 
     Material standing beside the part stands on the bed, where other cameras look too: a strand or blob shows some
     extra in a second view, and a part that detached or spills strands does not keep rising in the view that sees
@@ -113,17 +120,21 @@ def unseen_by_the_other_views(result: ShapeResult, usable: Mapping[str, ShapeRes
     first look or an anchor on a brim or a 2 mm slice: the part's side beyond the outline, the brim filling the
     outline's other edge), its background frame (a parked head's shadow whose edge moved: lit bed). A displaced
     newest band beside extra material that is not decisive (a layer shift one view's band sees) still counts.
+    A relit view is no witness either way: where a reflection crosses the part it reads lit bed as extra material
+    (it never fails a print alone in decide), so its extra neither confirms nor refutes the failing view's.
     """
     if result.passed or result.extra_pct * 2.0 <= result.missing_pct:
         return False
     others = [r for name, r in usable.items() if name != result.camera]
-    if not (any(not r.relit for r in others) and all(sees_nothing_extra(r) for r in others)):
+    witnesses = [r for r in others if not r.relit]
+    if not (witnesses and all(sees_nothing_extra(r) for r in witnesses)):
         return False
     if not result.decisive:
         return result.band_error_pct is None or result.band_error_pct <= result.band_threshold
 
     def rising(r: ShapeResult) -> bool:
-        return not r.relit and r.growth_pct is not None and r.growth_pct >= VISIBLY_RISING_PCT
+        reading = rise_since_previous_check(r)
+        return not r.relit and reading is not None and reading >= VISIBLY_RISING_PCT
 
     return (result.moved_px is None and result.extra_pct >= MOSTLY_EXTRA_RATIO * result.missing_pct
             and rising(result) and any(rising(r) for r in others))
@@ -578,9 +589,10 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       part found elsewhere: the part moved; extra material four times the threshold); extra material
       alone that appeared at once (``extra_before``: each camera's extra at its previous check) in one
       camera of a stereo pair (``pairs``) whose partner passes and sees none does not count
-      (:func:`unseen_by_partner`), nor does extra material that every other usable view passes without seeing any of
-      (not decisive with the newest band within its threshold, or decisive with three times as much extra as missing
-      material while this view and another read the part rising: :func:`unseen_by_the_other_views`);
+      (:func:`unseen_by_partner`), nor does extra material that every other usable view not relit passes without seeing
+      any of (not decisive with the newest band within its threshold, or decisive with three times as much extra as
+      missing material while this view and another read the part rising since their previous check, fine or to the
+      pixel: :func:`unseen_by_the_other_views`);
       views read against a relit background (``ShapeResult.relit``) count only
       alongside a failing view that was not (in no share of views, nor for loose material or a layer shift),
     * while the part visibly grows (median growth >= 50 %), a camera failing on missing material
