@@ -580,16 +580,17 @@ def place_outline(observed: np.ndarray, observed_strong: np.ndarray, expected: n
 
 def zone_places(placement: Placement, first_look: bool) -> np.ndarray:
     """(k, 2) int: the shifts (dx, dy) the bed-marks zone is laid at: the outline's and, at a camera's ``first_look``
-    (no anchor yet), every shift the check could not tell apart from it (:attr:`Placement.candidates`). The zone lies
-    on the bed, where the calibration puts the bed plane; the alignment carries it with the part only as far as it
-    knows where the part stands. A short part inside its skirt fits equally anywhere in the disc the ring and its
-    JPEG halo fill, and the outline, put on the disc's upper rim, carries the zone off the ring's near side: the
-    skirt read as unexpected material. (Later looks keep the anchor's place: a wrong one is looked at again where
-    extra material shows it, :meth:`core.pipeline.CheckRunner._second_look`.)"""
-    shift = np.array([placement.shift], int)
-    if not first_look or placement.candidates is None or not len(placement.candidates):
-        return shift
-    return np.concatenate([shift, np.asarray(placement.candidates, int).reshape(-1, 2)])
+    (no anchor yet) that could not tell the part's place (more than one :attr:`Placement.candidates`), the calibrated
+    place (0, 0) too. The zone lies on the bed, where the calibration puts the bed plane; the alignment carries it
+    with the part only as far as it knows where the part stands. A short part inside its skirt fits equally
+    anywhere in the disc the ring and its JPEG halo fill; the outline, put on the disc's upper rim, carried the zone
+    off the ring's near side, and the skirt read as unexpected material. (Laid at every tied shift, the zone also took
+    in a part tipped over beside its place at the first check, cross-check seed 24 041_detach: the calibrated place
+    is the one the calibration vouches for. Later looks keep the anchor's place: a wrong one is looked at again
+    where extra material shows it, :meth:`core.pipeline.CheckRunner._second_look`.)"""
+    if not first_look or placement.candidates is None or len(placement.candidates) < 2:
+        return np.array([placement.shift], int)
+    return np.array([placement.shift, (0, 0)], int)
 
 
 def outline_jumped(before: tuple[int, int] | None, now: tuple[int, int], tolerance: float) -> bool:
