@@ -578,6 +578,21 @@ def place_outline(observed: np.ndarray, observed_strong: np.ndarray, expected: n
     return Placement((dx, dy), best_candidate, shift_candidates, outline_best)
 
 
+def zone_places(placement: Placement, first_look: bool) -> np.ndarray:
+    """(k, 2) int: the shifts (dx, dy) the bed-marks zone is laid at: the outline's and, at a camera's ``first_look``
+    (no anchor yet) that could not tell the part's place (more than one :attr:`Placement.candidates`), the calibrated
+    place (0, 0) too. The zone lies on the bed, where the calibration puts the bed plane; the alignment carries it
+    with the part only as far as it knows where the part stands. A short part inside its skirt fits equally
+    anywhere in the disc the ring and its JPEG halo fill; the outline, put on the disc's upper rim, carried the zone
+    off the ring's near side, and the skirt read as unexpected material. (Laid at every tied shift, the zone also took
+    in a part tipped over beside its place at the first check, cross-check seed 24 041_detach: the calibrated place
+    is the one the calibration vouches for. Later looks keep the anchor's place: a wrong one is looked at again
+    where extra material shows it, :meth:`core.pipeline.CheckRunner._second_look`.)"""
+    if not first_look or placement.candidates is None or len(placement.candidates) < 2:
+        return np.array([placement.shift], int)
+    return np.array([placement.shift, (0, 0)], int)
+
+
 def outline_jumped(before: tuple[int, int] | None, now: tuple[int, int], tolerance: float) -> bool:
     """The outline was laid more than two tolerances + 1 px from where the previous check laid it (``before``: its
     shift, None when unknown): the two outlines' tolerance rings are apart, a jump; a move within that (1-3 px) is
@@ -694,7 +709,7 @@ def check_shape(
         observed &= ~holes | enclosed(cleaned & outline_zone(expected_a, tol, tol))
     # the search box and the bed-marks zone come from the same calibration: they move with the alignment
     search_a = shift_mask(search, dx, dy) | grown_a
-    dont_care_a = dilate(shift_mask(dont_care, dx, dy), tol)
+    dont_care_a = dilate(shifted_union(dont_care, zone_places(placement, first_look=anchor is None)), tol)
     reflection_a = (dilate(shift_mask(regions.reflection[crop].astype(bool), dx, dy), tol)
                     if regions.reflection is not None else None)
     # ... but the part's mirror image in a glossy bed lies below where the part truly stands, and where this
