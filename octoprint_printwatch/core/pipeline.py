@@ -29,7 +29,7 @@ from .layer_shift import LayerShift, band_reads_shifted
 from .shape_check import ExpectedRegions, ShapeResult, check_shape, not_decisive_where_it_stood
 from .nest import SOLID_MIN_COVERAGE, STALL_READ_BELOW_GROWTH_PCT
 from .verdict import (RISE_HELD_READINGS, band_shifts_of, decide, finest_reading, held_rise, layer_shift_of,
-                      lowest_missing_while_rising, missing_since_rise)
+                      lowest_missing_while_rising, missing_since_rise, rise_since_previous_check)
 
 VERDICTS = ("ok", "fail", "unknown")
 
@@ -723,7 +723,7 @@ class CheckRunner:
             if reading is not None:
                 self.rise_ever_read = True
                 state.rise_readings = (*state.rise_readings, reading)[-RISE_HELD_READINGS:]
-            state.last_rise = r.growth_pct if r.growth_pct is not None else r.coarse_growth_pct
+            state.last_rise = rise_since_previous_check(r)
             if verdict == "ok":   # (a check that failed is no healthy look: a part knocked loose still "rises")
                 state.missing_while_rising = lowest_missing_while_rising(
                     state.missing_while_rising, state.last_rise, r.missing_pct, r.band_missing_pct)

@@ -307,7 +307,7 @@ def rise_for_loose_material(usable: Mapping[str, ShapeResult], growth: Sequence[
     knocked off or stopped under a pile of strands does both."""
     if len(growth) >= 2 or (growth and len(usable) == 1):
         return float(np.median(growth))
-    readings = [r.growth_pct if r.growth_pct is not None else r.coarse_growth_pct for r in usable.values()]
+    readings = [rise_since_previous_check(r) for r in usable.values()]
     readings = [g for g in readings if g is not None and g >= SANK_BELOW_PCT]
     if len(readings) >= 2 or (readings and len(usable) == 1):
         return float(np.median(readings))

@@ -1,12 +1,16 @@
 """Drives Debian's Chromium (never a downloaded browser) through Playwright against a running OctoPrint.
 
-Used by the browser tests and by anyone who wants fresh screenshots of the UI
-(``docs/img/ui_*.png``).
+Used by the browser tests and by anyone who wants fresh screenshots of the UI: with
+``PRINTWATCH_SCREENSHOTS=docs/img`` the browser tests rewrite the README's ``docs/img/ui_*.png``;
+without it they go to a folder under the system's temporary directory, so running the suite never
+changes the checkout.
 """
 from __future__ import annotations
 
 import contextlib
+import os
 import shutil
+import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterator
@@ -20,7 +24,7 @@ CHROMIUM_ARGS = [
     "--disable-sync",
     "--no-first-run",
 ]
-SCREENSHOTS = Path(__file__).resolve().parents[2] / "docs" / "img"
+SCREENSHOTS = Path(os.environ.get("PRINTWATCH_SCREENSHOTS") or Path(tempfile.gettempdir()) / "printwatch-screenshots")
 
 
 def chromium_available() -> bool:
@@ -132,6 +136,9 @@ def open_printwatch_settings(page, timeout_ms: float = 30000) -> None:
     page.wait_for_selector("#settings_dialog", state="visible", timeout=timeout_ms)
     page.click('#settings_dialog_menu a[href="#settings_plugin_printwatch"]')
     page.wait_for_selector("#settings_plugin_printwatch", state="visible", timeout=timeout_ms)
+    # Bootstrap fades the dialog in: "visible" comes first, and a screenshot then shows the page through it
+    page.wait_for_function("getComputedStyle(document.querySelector('#settings_dialog')).opacity === '1'",
+                           timeout=timeout_ms)
 
 
 def save_settings(page, timeout_ms: float = 30000) -> None:
@@ -140,7 +147,7 @@ def save_settings(page, timeout_ms: float = 30000) -> None:
 
 
 def screenshot(page, name: str, selector: str | None = None) -> Path:
-    """Save ``docs/img/ui_<name>.png`` (a whole page, or one element) and return its path."""
+    """Save ``ui_<name>.png`` in ``SCREENSHOTS`` (a whole page, or one element) and return its path."""
     SCREENSHOTS.mkdir(parents=True, exist_ok=True)
     path = SCREENSHOTS / f"ui_{name}.png"
     tmp = path.with_suffix(".tmp.png")

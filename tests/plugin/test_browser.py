@@ -13,7 +13,7 @@ logged in with the tab open while it prints; what they must see:
 - a threshold changed in the settings stays changed (reload, and the API);
 - a user without the admin permission sees everything but cannot change it.
 
-Screenshots land in ``docs/img/ui_*.png`` for the README.
+Screenshots land in ``$PRINTWATCH_SCREENSHOTS`` (``docs/img`` to refresh the README's), else a temporary folder.
 """
 from __future__ import annotations
 
