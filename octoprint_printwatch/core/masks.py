@@ -1,6 +1,8 @@
 """Binary-mask helpers shared by the vision checks; every mask is (h, w) bool."""
 from __future__ import annotations
 
+from functools import cached_property
+
 import cv2
 import numpy as np
 
@@ -22,11 +24,23 @@ def blobs_lying_on(mask: np.ndarray, zone: np.ndarray, share: float) -> np.ndarr
     return lying[labels]
 
 
+#: lowest_rows tests each label's rows on its own up to this many labels asked.
+_LOWEST_ROWS_PER_LABEL = 4
+
+
 def lowest_rows(labels: np.ndarray, asked: np.ndarray) -> np.ndarray:
     """(count,) int64: the lowest row of each label ``asked`` ((count,) bool) in ``labels`` ((h, w) int), -1 for
     the others (the row cv2.connectedComponentsWithStats' top + height - 1 gives, for the labels read)."""
     lowest = np.full(len(asked), -1, np.int64)
-    if asked.any():
+    wanted = np.flatnonzero(asked)
+    if wanted.size <= _LOWEST_ROWS_PER_LABEL:
+        # (a row test per label: for the one or two blobs usually asked, a few times cheaper than gathering the
+        # pixels of all of them)
+        for label in wanted:
+            rows = np.flatnonzero((labels == label).any(axis=1))
+            if rows.size:
+                lowest[label] = rows[-1]
+    else:
         ys, xs = np.nonzero(asked[labels])
         np.maximum.at(lowest, labels[ys, xs], ys)
     return lowest
@@ -43,14 +57,35 @@ def dilate(mask: np.ndarray, radius: float) -> np.ndarray:
         return mask.astype(bool)
     if radius <= 2.5:
         return cv2.dilate(mask.astype(np.uint8), disk(radius)).astype(bool)
+    return within(mask, radius)
+
+
+def within(mask: np.ndarray, radius: float) -> np.ndarray:
+    """(h, w) bool: ``cv2.distanceTransform((~mask).astype(np.uint8), cv2.DIST_L2, 3) <= radius`` for a (h, w) bool
+    ``mask``, bit for bit, computed on the box that can be reached only: the 3x3 distance grows by at least 0.955 px
+    per px, so nothing beyond that box is within ``radius``, and inside it the distances are the whole image's (a
+    pixel's shortest 3x3 path to its nearest mask pixel stays within the box around the two; the image's border is
+    no source)."""
     out = np.zeros(mask.shape, bool)
-    # (on the box that can be reached only: the 3x3 distance grows by at least 0.955 px per px, so nothing
-    # beyond that box is within ``radius``, and inside it the distances are the whole image's)
     box = bounding_box(mask, pad=int(np.ceil(radius / 0.955)) + 1)
     if box is None:
         return out
     inner = (slice(box[0], box[1]), slice(box[2], box[3]))
     out[inner] = cv2.distanceTransform((~mask[inner].astype(bool)).astype(np.uint8), cv2.DIST_L2, 3) <= radius
+    return out
+
+
+def distance_up_to(mask: np.ndarray, reach: float) -> np.ndarray:
+    """(h, w) float32: ``cv2.distanceTransform((~mask).astype(np.uint8), cv2.DIST_L2, 3)`` for a (h, w) bool ``mask``
+    wherever it is at most ``reach``, bit for bit (as :func:`within`: computed on the box that can be reached only),
+    and above ``reach`` (+inf beyond the box) everywhere else: every test of it against a distance up to ``reach``
+    gives the whole image's answer."""
+    out = np.full(mask.shape, np.inf, np.float32)
+    box = bounding_box(mask, pad=int(np.ceil(reach / 0.955)) + 1)
+    if box is None:
+        return out
+    inner = (slice(box[0], box[1]), slice(box[2], box[3]))
+    out[inner] = cv2.distanceTransform((~mask[inner].astype(bool)).astype(np.uint8), cv2.DIST_L2, 3)
     return out
 
 
@@ -239,7 +274,9 @@ def _reaching_in(objects: np.ndarray, search: np.ndarray, expected: np.ndarray, 
     count, labels, area = components(objects[inner])
     if count <= 1:
         return out, kept
-    ceiling = np.where(search.any(axis=0), np.argmax(search, axis=0), search.shape[0])[x0:x1]
+    # (each column's top row of the search box, read on the objects' columns only)
+    columns = search[:, x0:x1]
+    ceiling = np.where(columns.any(axis=0), np.argmax(columns, axis=0), search.shape[0])
     above = np.arange(y0, y1)[:, None] < ceiling[None, :]
     beyond = np.bincount(labels[~search[inner]], minlength=count)
     from_above = np.bincount(labels[above], minlength=count)
@@ -271,10 +308,13 @@ def _reaching_in(objects: np.ndarray, search: np.ndarray, expected: np.ndarray, 
         followed &= lowest < foot_zone
     foreign |= followed
     foreign[0] = False
-    out[inner] = foreign[labels]
     at_foot &= ~foreign
     at_foot[0] = False
-    kept[inner] = at_foot[labels]
+    # (painted only where a blob has them: most checks have no object from above)
+    if foreign.any():
+        out[inner] = foreign[labels]
+    if at_foot.any():
+        kept[inner] = at_foot[labels]
     return out, kept
 
 
@@ -317,31 +357,85 @@ def crossing_the_box(objects: np.ndarray, search: np.ndarray, outline: np.ndarra
     to whatever lies next to it (the place the rod held in the background frame, a brim, the part's
     reflection in a glass bed), and such a blob is neither straight nor of one thickness.
     """
-    out = _rods_among(objects, search, outline, part_in_place)
+    zones = _OutlineZones(outline)
+    out = _rods_among(objects, search, zones, part_in_place)
     if material is not None:
-        out |= _rods_among(material & ~out, search, outline, part_in_place)
+        out |= _rods_among(material & ~out, search, zones, part_in_place)
     return out
 
 
-def _rods_among(objects: np.ndarray, search: np.ndarray, outline: np.ndarray, part_in_place: bool) -> np.ndarray:
+class _OutlineZones:
+    """The zones around the part's outline zone that :func:`_rods_among` reads, each made once for both of
+    :func:`crossing_the_box`'s groupings (the same outline) and only when a grouping gets that far."""
+
+    def __init__(self, outline: np.ndarray):
+        self.outline_u8 = outline.astype(np.uint8)
+
+    @cached_property
+    def ring(self) -> np.ndarray:
+        """(h, w) bool: within APART_FROM_OUTLINE_PX of the outline zone (apart_from_outline's ring, before it
+        is cut to the objects)."""
+        return cv2.dilate(self.outline_u8, disk(APART_FROM_OUTLINE_PX)).astype(bool)
+
+    @cached_property
+    def at_part(self) -> np.ndarray:
+        """(h, w) bool: within 5 px of the outline zone (a rod's end there runs on behind the part)."""
+        return cv2.dilate(self.outline_u8, disk(5)).astype(bool)
+
+
+def labelled_on_its_box(mask: np.ndarray) -> tuple[int, np.ndarray, tuple[slice, slice]]:
+    """cv2.connectedComponents(mask, connectivity=8) for a (h, w) bool ``mask`` -> (count, labels (h, w) int32, the
+    box the labelling was done on (slices of ``mask``)), computed on the mask's bounding box only: every blob lies in
+    it, and a mask's blobs often fill a small part of the crop. The box's top-left corner is moved to even
+    coordinates: OpenCV's labelling scans 2x2 blocks and numbers the blobs in the order it meets them, so on a box
+    that keeps the block grid every blob gets the label it gets on the whole mask (the order decides which rod line a
+    piece is matched to first, :func:`_rods_come_out`)."""
+    box = bounding_box(mask)
+    labels = np.zeros(mask.shape, np.int32)
+    if box is None:
+        return 1, labels, (slice(0, 0), slice(0, 0))
+    inner = (slice(box[0] - box[0] % 2, box[1]), slice(box[2] - box[2] % 2, box[3]))
+    count, labels[inner] = cv2.connectedComponents(mask[inner].astype(np.uint8), connectivity=8)
+    return count, labels, inner
+
+
+def _fill_extents(stats: np.ndarray, labels: np.ndarray, indices: np.ndarray, inner: tuple[slice, slice]):
+    """Writes the bounding box (cv2.connectedComponentsWithStats' left, top, width and height) of each blob of
+    ``indices`` in ``labels`` ((h, w) int, the blobs within the box ``inner``) into its row of ``stats``. (OpenCV's
+    statistics of every blob cost twice the labelling; a check reads a blob or two.)"""
+    for index in indices:
+        hit = labels[inner] == index
+        rows, cols = np.flatnonzero(hit.any(axis=1)), np.flatnonzero(hit.any(axis=0))
+        stats[index, cv2.CC_STAT_TOP] = inner[0].start + rows[0]
+        stats[index, cv2.CC_STAT_HEIGHT] = rows[-1] + 1 - rows[0]
+        stats[index, cv2.CC_STAT_LEFT] = inner[1].start + cols[0]
+        stats[index, cv2.CC_STAT_WIDTH] = cols[-1] + 1 - cols[0]
+
+
+def _rods_among(objects: np.ndarray, search: np.ndarray, zones: _OutlineZones, part_in_place: bool) -> np.ndarray:
     """:func:`crossing_the_box` for one grouping of the pixels into blobs (``objects``)."""
     out = np.zeros(objects.shape, bool)
-    outline_u8 = outline.astype(np.uint8)
-    apart, ring = apart_from_outline(objects, outline)
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(apart.astype(np.uint8), connectivity=8)
+    # (apart_from_outline with the ring made once)
+    ring = zones.ring & objects
+    apart = objects & ~ring
+    count, labels, inner = labelled_on_its_box(apart)
     if count <= 1:
         return out
     # a cheap first look: in the box and beyond it, and long (a blob of length L and thickness T has a
-    # bounding box whose diagonal is about L and an area of L T)
+    # bounding box whose diagonal is about L and an area of L T); the extents are read for the large blobs that
+    # cross the box's edge only
+    stats = np.zeros((count, 5), np.int32)     # (cv2.connectedComponentsWithStats' layout, filled where read)
+    stats[:, cv2.CC_STAT_AREA] = np.bincount(labels[inner].ravel(), minlength=count)
     area = stats[:, cv2.CC_STAT_AREA].astype(np.float64)
-    diagonal_2 = stats[:, cv2.CC_STAT_WIDTH].astype(np.float64) ** 2 + stats[:, cv2.CC_STAT_HEIGHT] ** 2.0
-    candidates = (area >= 30) & (diagonal_2 >= ROD_MIN_ELONGATION * area)
+    in_box = np.bincount(labels[inner][search[inner]], minlength=count)
+    candidates = (area >= 30) & (in_box > 0) & (in_box < area)
     candidates[0] = False
+    _fill_extents(stats, labels, np.flatnonzero(candidates), inner)
+    diagonal_2 = stats[:, cv2.CC_STAT_WIDTH].astype(np.float64) ** 2 + stats[:, cv2.CC_STAT_HEIGHT] ** 2.0
+    candidates &= diagonal_2 >= ROD_MIN_ELONGATION * area
     if not candidates.any():
         return out
-    in_box = np.bincount(labels.ravel(), weights=search.ravel().astype(np.float64), minlength=count)
-    candidates &= (in_box > 0) & (in_box < area)
-    at_part = cv2.dilate(outline_u8, disk(5)).astype(bool)
+    at_part = zones.at_part
     h, w = objects.shape
     behind = []     # the lines of the rods that run on behind the part
     for index in np.flatnonzero(candidates):
@@ -362,6 +456,10 @@ def _rods_among(objects: np.ndarray, search: np.ndarray, outline: np.ndarray, pa
         strip = (np.abs(across) <= half_width) & (along >= first - 6) & (along <= last + 6)
         out[by0:by1, bx0:bx1] |= strip & ((labels[by0:by1, bx0:bx1] == index) | ring[by0:by1, bx0:bx1])
     if behind:
+        # (every large blob is read there: the extents not read yet)
+        unread = (stats[:, cv2.CC_STAT_AREA] >= 30) & (stats[:, cv2.CC_STAT_WIDTH] == 0)
+        unread[0] = False
+        _fill_extents(stats, labels, np.flatnonzero(unread), inner)
         out |= _rods_come_out(labels, stats, at_part, behind) & ~out
     return out
 
@@ -425,7 +523,7 @@ def _rod_line(xs: np.ndarray, ys: np.ndarray, at_part: np.ndarray, in_box: np.nd
     # (sections at the part are left out: the ring cut them, or the rod runs on behind the part there)
     inner = filled & ~(np.bincount(bins, weights=at_part.astype(np.float64), minlength=n) > 0)
     inner[:trim] = inner[n - trim:] = False
-    if inner.sum() < 1.5 * thickness:
+    if np.count_nonzero(inner) < 1.5 * thickness:
         return None
     positions = np.flatnonzero(inner).astype(np.float64)
     middle = 0.5 * (low[inner] + high[inner])

@@ -41,7 +41,7 @@ from .alignment import (align_candidates, align_expected, displaced_part, near_a
 from .growth import Rise, edge_in_the_frame, read_rise
 from .material import (Evidence, clean_mask, detectable_fraction, differs_as_a_group, enclosed, material_evidence,
                        not_the_part_colour, part_palette)
-from .masks import (blobs_lying_on, bounding_box, components, dilate, disk, erode, outline_zone,
+from .masks import (blobs_lying_on, bounding_box, components, dilate, disk, distance_up_to, erode, outline_zone,
                     reaching_in_from_above, shift_mask, shifted_union, crossing_the_box, mirror_match, upper_profile,
                     MIRROR_MATCH_SHARE, PART_IN_PLACE_MAX_MISSING, PART_IN_PLACE_MIN_SEEN)
 
@@ -407,10 +407,10 @@ def compare_masks(
     missing = cv2.morphologyEx(missing.astype(np.uint8), cv2.MORPH_OPEN, _KERNEL3).astype(bool)
     grown = outline_zone(expected, tolerance, top_tolerance)
     outside = observed & ~grown
-    objects = foreign = None
+    objects = foreign = rods_without_foreign = None
     # (a part that tipped over or slid away can look like a rod, or rise above the box joined to its foot
     # only along its old outline: it is missing from its place)
-    in_place = (int(missing.sum()) <= PART_IN_PLACE_MAX_MISSING * max(int(expected.sum()), 1)
+    in_place = (np.count_nonzero(missing) <= PART_IN_PLACE_MAX_MISSING * max(np.count_nonzero(expected), 1)
                 and np.count_nonzero(observed & core) >= PART_IN_PLACE_MIN_SEEN * np.count_nonzero(core))
     if outside.any():
         # Something reaching in from outside the search box (the parked hotend, the gantry, a hand) is not
@@ -432,7 +432,8 @@ def compare_masks(
         # ... nor is a rod crossing the box from the side (the X rods, their reflection in glass); one that
         # ends behind the part only while the part stands where it belongs (core/masks.py). (Looked for
         # only when extra material reaches the box's edge, as a rod's does: most checks have none.)
-        outside &= ~crossing_the_box(objects, search, grown, part_in_place=in_place, material=outside)
+        rods_without_foreign = crossing_the_box(objects, search, grown, part_in_place=in_place, material=outside)
+        outside &= ~rods_without_foreign
         extra = cv2.morphologyEx(cv2.morphologyEx((outside & search).astype(np.uint8), cv2.MORPH_CLOSE, _KERNEL3),
                                  cv2.MORPH_OPEN, _KERNEL5)
     rods = None
@@ -441,34 +442,43 @@ def compare_masks(
         if ((objects | material_outside) & search & ~erode(search, 2)).any():
             # (a rod crossing the box has pixels at its edge; weakly seen pixels outside the outline reach it at most
             # checks, so this runs at most checks: the eighteenth session's +3 ms median per camera-check)
-            rods = crossing_the_box(objects, search, grown, part_in_place=in_place, material=material_outside)
+            # (the same call as above where no foreign object took material away from ``outside`` there)
+            rods = (rods_without_foreign if rods_without_foreign is not None and not foreign.any()
+                    else crossing_the_box(objects, search, grown, part_in_place=in_place, material=material_outside))
     extra = extra.astype(bool) & ~grown
-    if extra.any():
+    # (the blobs are judged on their box with a ring of bed around it, often a small part of the crop: each blob's
+    # figures, its area, how much of it lies in a zone and its thickness, are the same there; ``blobs`` is a view, so
+    # what is dropped from it is dropped from ``extra``)
+    box = bounding_box(extra, pad=1)
+    if box is not None:
+        inner = (slice(box[0], box[1]), slice(box[2], box[3]))
+        blobs = extra[inner]
         # specks far smaller than the part are noise, not a failure (a real blob is a sizeable share)
-        count, labels, area = components(extra)
-        small = area < max(30, 0.003 * int(expected.sum()))
+        count, labels, area = components(blobs)
+        small = area < max(30, 0.003 * int(np.count_nonzero(expected)))
         small[0] = False
-        extra &= ~small[labels]
-    if (dont_care.any() or (reflection is not None and reflection.any())) and extra.any():
-        # a blob lying (almost) wholly where flat bed marks or reflections can appear is one of them;
-        # anything that also rises out of that zone (spaghetti, a moved part) counts in full
-        count, labels = cv2.connectedComponents(extra.astype(np.uint8), connectivity=8)
-        area = np.bincount(labels.ravel(), minlength=count)
-        inside = np.bincount(labels[dont_care], minlength=count)
-        # ... and thin: a part that slid 10 mm also sits in that zone, but stands far thicker
-        depth = cv2.distanceTransform(extra.astype(np.uint8), cv2.DIST_L2, 3)
-        thickness = np.zeros(count, np.float32)
-        np.maximum.at(thickness, labels[extra], depth[extra])
-        flat = (inside >= 0.8 * np.maximum(area, 1)) & (2.0 * thickness <= flat_max_px)
-        if reflection is not None:
-            # a brim and the part's reflection touch at the part's foot and merge into one blob: it lies
-            # in the union of the two zones, not (80 %) in either. A part that slid into these zones is
-            # still found, by :func:`displaced_part`, from the material missing where it belongs.
-            mirrored = np.bincount(labels[reflection], minlength=count)
-            either = np.bincount(labels[reflection | dont_care], minlength=count)
-            flat |= (mirrored >= 0.8 * np.maximum(area, 1)) | (either >= 0.8 * np.maximum(area, 1))
-        flat[0] = False
-        extra &= ~flat[labels]
+        blobs &= ~small[labels]
+        if (dont_care.any() or (reflection is not None and reflection.any())) and blobs.any():
+            # a blob lying (almost) wholly where flat bed marks or reflections can appear is one of them;
+            # anything that also rises out of that zone (spaghetti, a moved part) counts in full
+            count, labels = cv2.connectedComponents(blobs.astype(np.uint8), connectivity=8)
+            area = np.bincount(labels.ravel(), minlength=count)
+            inside = np.bincount(labels[dont_care[inner]], minlength=count)
+            # ... and thin: a part that slid 10 mm also sits in that zone, but stands far thicker
+            # (each blob pixel's nearest bed pixel lies within the box's ring, or the box is cut by the crop's edge)
+            depth = cv2.distanceTransform(blobs.astype(np.uint8), cv2.DIST_L2, 3)
+            thickness = np.zeros(count, np.float32)
+            np.maximum.at(thickness, labels[blobs], depth[blobs])
+            flat = (inside >= 0.8 * np.maximum(area, 1)) & (2.0 * thickness <= flat_max_px)
+            if reflection is not None:
+                # a brim and the part's reflection touch at the part's foot and merge into one blob: it lies
+                # in the union of the two zones, not (80 %) in either. A part that slid into these zones is
+                # still found, by :func:`displaced_part`, from the material missing where it belongs.
+                mirrored = np.bincount(labels[reflection[inner]], minlength=count)
+                either = np.bincount(labels[reflection[inner] | dont_care[inner]], minlength=count)
+                flat |= (mirrored >= 0.8 * np.maximum(area, 1)) | (either >= 0.8 * np.maximum(area, 1))
+            flat[0] = False
+            blobs &= ~flat[labels]
     if not_the_prints is not None and extra.any():
         # blobs found to be something else with what these masks cannot show (check_shape: not of the part's
         # colour, or the mirror image of the parked hotend), dropped before any figure is counted
@@ -478,12 +488,12 @@ def compare_masks(
     return Comparison(
         missing=missing,
         extra=extra,
-        expected_pixels=int(expected.sum()),
+        expected_pixels=int(np.count_nonzero(expected)),
         raw_diff_pixels=int(np.count_nonzero(observed & search ^ expected & search)),
         band_missing=int(np.count_nonzero(missing & band)),
         band_extra=int(np.count_nonzero(extra & near_band)),
-        band_pixels=int(band.sum()),
-        band_core_pixels=int(band_core.sum()),
+        band_pixels=int(np.count_nonzero(band)),
+        band_core_pixels=int(np.count_nonzero(band_core)),
         foreign=foreign,
         part_in_place=in_place,
         rods=rods,
@@ -546,8 +556,8 @@ def place_outline(observed: np.ndarray, observed_strong: np.ndarray, expected: n
     # and on the part as it was at the previous check (where failures do not begin), so a runout or a
     # shifted top cannot pull the alignment
     older = expected & ~band
-    template = older if older.sum() >= 0.3 * expected.sum() else expected
-    strong_shows_part = observed_strong.sum() >= STRONG_TEMPLATE_SHARE * expected.sum()
+    template = older if np.count_nonzero(older) >= 0.3 * np.count_nonzero(expected) else expected
+    strong_shows_part = np.count_nonzero(observed_strong) >= STRONG_TEMPLATE_SHARE * np.count_nonzero(expected)
     if strong_shows_part and template is older and anchor is not None:
         # ... and most of the part the alignment fits, the older part, where earlier checks placed it (the
         # anchor): a part's sides in the bed's colour give weak cues only, and its lit top face (strong) lies in
@@ -658,7 +668,7 @@ def check_shape(
     expected_full = regions.silhouette.astype(bool)
     shift_bound = int(np.ceil(regions.max_shift_px))
     tol = float(regions.tolerance_px)
-    expected_pixels = int(expected_full.sum())
+    expected_pixels = int(np.count_nonzero(expected_full))
     if expected_pixels == 0:
         return ShapeResult(camera, 0.0, 0.0, 0.0, 0.0, None, None, 0, 0, None, (0, 0), threshold,
                            band_threshold,
@@ -678,8 +688,9 @@ def check_shape(
     band = regions.new_band[crop].astype(bool) & expected
     search = regions.search[crop].astype(bool)
     dont_care = regions.dont_care[crop].astype(bool)
-    # one distance transform gives every grown copy of the expected silhouette
-    distance = cv2.distanceTransform((~expected).astype(np.uint8), cv2.DIST_L2, 3)
+    # one distance transform gives every grown copy of the expected silhouette (read up to the bed sample's distance,
+    # the farthest tested)
+    distance = distance_up_to(expected, shift_bound + 2 * tol + 4)
     prior = distance <= shift_bound + tol + 1
     bed_sample = (distance > shift_bound + 2 * tol + 4) & ~dont_care
     previous = cropped(previous_mask, (h, w), crop)
@@ -724,7 +735,8 @@ def check_shape(
     # from what the camera sees instead (a black part against a black backdrop cannot be missed)
     core = erode(expected_a, tol)
     seen_part = observed & core
-    palette_now = part_palette(frame[crop], seen_part) if seen_part.sum() >= 0.15 * max(core.sum(), 1) else None
+    palette_now = (part_palette(frame[crop], seen_part)
+                   if np.count_nonzero(seen_part) >= 0.15 * max(np.count_nonzero(core), 1) else None)
     palette_used = palette_now if palette_now is not None else palette
     bed_evidence = evidence.bed.copy()
     hidden = core & bed_evidence & ~observed
@@ -796,8 +808,8 @@ def check_shape(
     growth_pct = rise.growth_pct
 
     n = max(comparison.expected_pixels, 1)
-    missing_pct = 100.0 * int(comparison.missing.sum()) / n
-    extra_pct = 100.0 * int(comparison.extra.sum()) / n
+    missing_pct = 100.0 * int(np.count_nonzero(comparison.missing)) / n
+    extra_pct = 100.0 * int(np.count_nonzero(comparison.extra)) / n
     error_pct = missing_pct + extra_pct
     raw_error_pct = 100.0 * comparison.raw_diff_pixels / n
     band_error = band_missing = shifted_band = band_coverage = band_texture = None
@@ -854,7 +866,8 @@ def check_shape(
         # check's outline, is no strand)
         placed_before = (shift_mask(expected, *shift_before) if outline_jumped(shift_before, (dx, dy), tol) else None)
         # (the part's top seen then, risen by the model's rise since: its newest band, wherever the outline lies)
-        risen = risen_top(seen_before, expected_a, before_a, shift_bound, tol) if rise_readable else None
+        # (made only where new_material counts new material: most checks have none)
+        risen = (lambda: risen_top(seen_before, expected_a, before_a, shift_bound, tol)) if rise_readable else None
         new_outside = new_material(observed, seen_before, expected_a, search_a, tol, regions.px_per_mm,
                                    ignore=reflection_a, marks=dont_care_a, linked=~evidence.bed,
                                    placed_before=placed_before, risen=risen,
@@ -881,7 +894,7 @@ def check_shape(
         shows_bed = comparison.missing & ~differs_as_a_group(
             frame[crop], evidence.background_norm, core & evidence.bed & ~observed, bed_sample, bed_factor,
             where=comparison.missing)
-        background_missing_pct = 100.0 * int(shows_bed.sum()) / n
+        background_missing_pct = 100.0 * int(np.count_nonzero(shows_bed)) / n
         if comparison.band_pixels:
             background_band_missing_pct = 100.0 * int(np.count_nonzero(shows_bed & band_a)) / comparison.band_pixels
 

@@ -31,7 +31,7 @@ import cv2
 import numpy as np
 
 from .layer_shift import count_viewpoints
-from .masks import components, dilate, disk, outline_zone, reaching_in_from_above, upper_profile
+from .masks import dilate, disk, labelled_on_its_box, outline_zone, reaching_in_from_above, upper_profile, within
 
 #: New material closer than this to the expected silhouette (mm at the part) is not counted: the residual
 #: calibration error (1 %, 0.5 deg, 1 mm) leaves a part's edge up to about a millimetre outside its outline.
@@ -114,8 +114,7 @@ def arc_around(material: np.ndarray, expected: np.ndarray, scale_mm2: float) -> 
 def beyond(silhouette: np.ndarray, tolerance: float, min_distance_px: float) -> np.ndarray:
     """(h, w) bool: where new material may count against ``silhouette``: outside its tolerance ring (doubled
     upwards) and farther than ``min_distance_px`` from it."""
-    distance = cv2.distanceTransform((~silhouette).astype(np.uint8), cv2.DIST_L2, 3)
-    return ~outline_zone(silhouette, tolerance, tolerance) & (distance > min_distance_px)
+    return ~outline_zone(silhouette, tolerance, tolerance) & ~within(silhouette, min_distance_px)
 
 
 def new_material(
@@ -136,7 +135,7 @@ def new_material(
     foreign: np.ndarray | None = None,
     part_in_place: bool = False,
     placed_before: np.ndarray | None = None,
-    risen: np.ndarray | None = None,
+    risen: np.ndarray | Callable[[], np.ndarray] | None = None,
 ) -> NewMaterial | None:
     """Material seen now and not at the previous check, outside the expected part and attached to it.
 
@@ -173,7 +172,8 @@ def new_material(
     risen : (h, w) bool or None, where the part's top this camera saw at the previous check stands once risen by
         the model's rise since (:func:`risen_top`): the part's newest band, though beyond an outline the calibration
         error laid off the part. Its pixels are taken away at the end, as ``placed_before``'s, beyond the bed-marks
-        zone only.
+        zone only. Or a function giving it, called only when there is new material to count (most checks have
+        none).
     Returns None when the test cannot be made (no scale, no previous mask, empty expected part).
     """
     if px_per_mm <= 0 or previous is None or previous.shape != observed.shape or not expected.any():
@@ -189,8 +189,8 @@ def new_material(
         new &= ~ignore
     if not new.any():   # (nothing new at all: the distances below are not needed)
         return none
-    distance = cv2.distanceTransform((~expected).astype(np.uint8), cv2.DIST_L2, 3)
-    far = distance > min_distance_mm * px_per_mm
+    # (distance > the minimum: the complement of the pixels within it, read on the box around the part only)
+    far = ~within(expected, min_distance_mm * px_per_mm)
     if not (new & far).any():   # most checks of a normal print end here
         return none
     if not_the_prints is not None:
@@ -210,10 +210,13 @@ def new_material(
                                          outline=grown if part_in_place else None)
     new &= ~foreign
     new &= ~reaching_in_from_above(outside, search, expected)
-    count, labels, area = components(new)
+    # (the blobs are labelled and read on the box around them: the same blobs, the same figures)
+    count, labels, inner = labelled_on_its_box(new)
+    area = np.bincount(labels[inner].ravel(), minlength=count)
     keep = np.ones(count, bool)
     keep[0] = False
-    ys, xs = np.nonzero(new)
+    ys, xs = np.nonzero(new[inner])
+    ys, xs = ys + inner[0].start, xs + inner[1].start
     ids = labels[ys, xs]
     # attached to the part: a blob of new material that reaches the expected part's tolerance ring; a line
     # far from the part flickering between two frames (the bed's edge) is not
@@ -224,18 +227,21 @@ def new_material(
         inside = np.bincount(ids, weights=marks[ys, xs], minlength=count)
         at_foot = keep & (inside >= 0.8 * np.maximum(area, 1))
         keep &= ~at_foot
-    counted = keep[labels] & far
-    foot = at_foot[labels] & far
+    counted, foot = np.zeros(new.shape, bool), np.zeros(new.shape, bool)
+    counted[inner] = keep[labels[inner]] & far[inner]
+    foot[inner] = at_foot[labels[inner]] & far[inner]
     if placed_before is not None and placed_before.shape == expected.shape and placed_before.any():
         # (only pixels are taken away: the objects above were judged on this check's outline, as without it)
         beyond_before = beyond(placed_before, tol, min_distance_mm * px_per_mm)
         counted &= beyond_before
         foot &= beyond_before
+    if callable(risen):
+        risen = risen()
     if risen is not None and risen.shape == expected.shape:
         # (not at the foot: there a short part's top and its layer shift's band lie together, and the zone's blobs
         # count only where two sides see them)
         counted &= ~risen
-    pixels = int(counted.sum())
+    pixels = int(np.count_nonzero(counted))
     foot_pixels = int(np.count_nonzero(foot)) if at_foot.any() else 0
     blobs = int(len(np.unique(labels[counted]))) if pixels else 0
     scale = 1.0 / (px_per_mm * px_per_mm)

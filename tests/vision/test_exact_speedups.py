@@ -461,3 +461,200 @@ def test_band_shift_on_its_window_is_band_shift_on_the_whole_image(monkeypatch):
             assert a.figures() == b.figures() and (a.null_dy, a.null_score) == (b.null_dy, b.null_score), trial
             assert np.array_equal(a.maps, b.maps) and np.array_equal(a.null_scores, b.null_scores), trial
     assert tested > 100
+
+
+# ------------------------------------------------ twenty-sixth session: work on the blobs' own box
+# What a user would notice if one of these differed: a check's verdict or figures changing with nothing but the
+# speed-up (an extra blob or a rod counted differently near the crop's edge, a pause that was not there before).
+
+
+def _whole_mask_labelling(mask):
+    """masks.labelled_on_its_box's plain form: the whole mask labelled."""
+    count, labels = cv2.connectedComponents(mask.astype(np.uint8), connectivity=8)
+    return count, labels, (slice(0, mask.shape[0]), slice(0, mask.shape[1]))
+
+
+def test_labelled_on_its_box_gives_every_blob_its_label_on_the_whole_mask():
+    """Labelling on the blobs' box (its corner moved to even coordinates) numbers the blobs as the whole mask does,
+    wherever the box starts (odd rows and columns) and at the frame's edges; an empty mask has no blob."""
+    from octoprint_printwatch.core.masks import labelled_on_its_box
+    rng = np.random.default_rng(31)
+    for trial in range(400):
+        h, w = (int(v) for v in rng.integers(10, 160, size=2))
+        mask = _blob_scene(rng)[:h, :w] if trial % 4 else np.zeros((h, w), bool)
+        h, w = mask.shape
+        # clear a random margin on each side (odd box corners), or keep blobs on the frame's edges
+        if trial % 3:
+            mask[: int(rng.integers(0, h // 2 + 1))] = False
+            mask[:, : int(rng.integers(0, w // 2 + 1))] = False
+        count, labels, inner = labelled_on_its_box(mask)
+        count_w, labels_w, _ = _whole_mask_labelling(mask)
+        assert count == count_w and np.array_equal(labels, labels_w), trial
+        assert not labels[~mask].any() and (labels[inner] > 0).sum() == mask.sum(), trial
+
+
+def _rod_scene(rng):
+    """A part, its outline zone and search box, and objects: rods crossing the box (some from the frame's edge,
+    some ending behind the part, some pieces coming out beyond it), strands and blobs, weak pixels joining them."""
+    from octoprint_printwatch.core.masks import outline_zone
+    h, w = (int(v) for v in rng.integers(90, 240, size=2))
+    part = np.zeros((h, w), bool)
+    py0, px0 = int(rng.integers(h // 3, h // 2)), int(rng.integers(w // 4, w // 2))
+    part[py0:py0 + h // 3, px0:px0 + w // 5] = True
+    outline = outline_zone(part, 2.0, 2.0)
+    search = np.zeros((h, w), bool)
+    top, bottom = int(rng.integers(0, py0 - 5)), h - int(rng.integers(0, 10))
+    search[top:bottom, int(rng.integers(0, 20)):w - int(rng.integers(0, 20))] = True
+    objects = np.zeros((h, w), np.uint8)
+    for _ in range(int(rng.integers(0, 4))):   # rods across the picture, or from one edge to the part
+        y = int(rng.integers(0, h))
+        x_end = w if rng.random() < 0.6 else px0 + int(rng.integers(0, w // 5))
+        cv2.line(objects, (0 if rng.random() < 0.7 else int(rng.integers(0, 10)), y),
+                 (x_end, y + int(rng.integers(-12, 13))), 1, int(rng.integers(3, 12)))
+        if x_end < w and rng.random() < 0.7:   # the rod's piece coming out beyond the part
+            yy = y + int(rng.integers(-3, 4))
+            cv2.line(objects, (px0 + w // 5 + int(rng.integers(2, 8)), yy), (w - int(rng.integers(0, 30)), yy), 1,
+                     int(rng.integers(3, 12)))
+    for _ in range(int(rng.integers(0, 12))):   # strands and blobs
+        x, y = int(rng.integers(0, w)), int(rng.integers(0, h))
+        cv2.line(objects, (x, y), (x + int(rng.integers(-25, 25)), y + int(rng.integers(-25, 25))), 1,
+                 int(rng.integers(1, 6)))
+    objects = objects.astype(bool) & ~outline
+    material = objects & (rng.random((h, w)) < rng.uniform(0.7, 1.0))
+    linked = (objects | (rng.random((h, w)) < 0.03)) & ~outline
+    return search, outline, linked, material
+
+
+def test_rods_read_on_the_objects_box_are_the_rods_read_on_the_whole_crop(monkeypatch):
+    """crossing_the_box labels each grouping on its blobs' box and reads the extents of the few blobs it tests (and,
+    where a rod runs on behind the part, of every large blob): the same strips as the whole crop labelled with
+    cv2.connectedComponentsWithStats, on rods at the frame's edges, rods ending behind the part, empty objects."""
+    from octoprint_printwatch.core import masks
+
+    def every_extent(stats, labels, indices, inner):
+        mask = labels > 0
+        _, labels_w, stats_w, _ = cv2.connectedComponentsWithStats(mask.astype(np.uint8), connectivity=8)
+        assert np.array_equal(labels_w, labels)
+        stats[1:, :4] = stats_w[1:, :4]
+
+    behind = []
+    come_out = masks._rods_come_out
+    monkeypatch.setattr(masks, "_rods_come_out", lambda *a: behind.append(1) or come_out(*a))
+    scenes = [_rod_scene(np.random.default_rng(1000 + trial)) for trial in range(160)]
+    scenes.append((scenes[0][0], scenes[0][1], np.zeros_like(scenes[0][2]), np.zeros_like(scenes[0][2])))
+
+    def run():
+        return [(masks.crossing_the_box(linked, search, outline, part_in_place=bool(i % 2), material=material),
+                 masks.crossing_the_box(linked, search, outline, part_in_place=True))
+                for i, (search, outline, linked, material) in enumerate(scenes)]
+
+    fast = run()
+    monkeypatch.setattr(masks, "labelled_on_its_box", _whole_mask_labelling)
+    monkeypatch.setattr(masks, "_fill_extents", every_extent)
+    plain = run()
+    for trial, (a, b) in enumerate(zip(fast, plain)):
+        assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1]), trial
+    assert sum(a[0].any() for a in fast) > 20 and len(behind) > 10
+
+
+def test_distances_read_on_the_box_are_the_whole_images():
+    """masks.within and masks.distance_up_to against cv2.distanceTransform of the whole image, thresholded at every
+    distance they are read at: masks touching the frame's edges, a single pixel, an empty and a full mask."""
+    from octoprint_printwatch.core.masks import distance_up_to, within
+    rng = np.random.default_rng(33)
+    masks_tried = [np.zeros((40, 30), bool), np.ones((40, 30), bool)]
+    single = np.zeros((50, 60), bool)
+    single[0, 59] = True
+    masks_tried.append(single)
+    masks_tried += [_blob_scene(rng) for _ in range(150)]
+    for trial, mask in enumerate(masks_tried):
+        whole = cv2.distanceTransform((~mask).astype(np.uint8), cv2.DIST_L2, 3)
+        for reach in (0.5, 1.0, 2.6, 3.0, float(rng.uniform(3, 40)), np.float64(rng.uniform(3, 40))):
+            assert np.array_equal(within(mask, reach), whole <= reach), (trial, reach)
+            up_to = distance_up_to(mask, reach)
+            for t in (0.0, 1.0, reach / 3, reach / 2, reach):
+                assert np.array_equal(up_to <= t, whole <= t), (trial, reach, t)
+                assert np.array_equal(up_to > t, whole > t), (trial, reach, t)
+
+
+def test_extra_blobs_judged_on_their_box_are_judged_on_the_whole_crop(monkeypatch):
+    """compare_masks drops specks and flat blobs (bed marks, reflections) on the extra material's box with a ring of
+    bed: the same masks and figures as on the whole crop, blobs on the crop's edges included."""
+    from octoprint_printwatch.core import shape_check
+
+    def run(seed):
+        rng = np.random.default_rng(seed)
+        out = []
+        for trial in range(150):
+            h, w, ey0, expected, search, observed, linked = _random_scene(rng, 200, int(rng.integers(0, 4)), 10, 50)
+            if trial % 3 == 0:   # blobs on the crop's edges
+                observed[:, : int(rng.integers(1, 8))] |= rng.random((h, 1)) < 0.5
+                observed[h - int(rng.integers(1, 8)):] = True
+            tol = float(rng.choice([1.0, 2.0, 3.0]))
+            marks = cv2.dilate((rng.random((h, w)) < 0.01).astype(np.uint8), np.ones((9, 15), np.uint8)).astype(bool)
+            reflection = (np.roll(expected, int(rng.integers(5, 30)), axis=0) & ~expected) if trial % 2 else None
+            comparison = compare_masks(observed, ~linked, expected, expected & (np.arange(h)[:, None] < ey0 + 5),
+                                       search, marks, tol, band_reach=2 * tol, flat_max_px=float(rng.uniform(4, 20)),
+                                       reflection=reflection, top_tolerance=tol, linked=linked)
+            out.append(comparison)
+        return out
+
+    fast = run(34)
+    monkeypatch.setattr(shape_check, "bounding_box",
+                        lambda mask, pad=0: (0, mask.shape[0], 0, mask.shape[1]) if mask.any() else None)
+    plain = run(34)
+    counted = 0
+    for trial, (a, b) in enumerate(zip(fast, plain)):
+        counted += bool(a.extra.any())
+        assert np.array_equal(a.missing, b.missing) and np.array_equal(a.extra, b.extra), trial
+        assert (a.band_extra, a.raw_diff_pixels, a.part_in_place) == (b.band_extra, b.raw_diff_pixels, b.part_in_place)
+    assert counted > 30
+
+
+def test_new_material_blobs_on_their_box_and_risen_top_made_when_read(monkeypatch):
+    """new_material labels the new material on its box, and takes the risen top as a function it calls only when it
+    counts: the same figures and masks as the whole crop labelled with the risen top given made."""
+    from octoprint_printwatch.core import tangle
+
+    def run(seed, lazy):
+        rng = np.random.default_rng(seed)
+        out, calls = [], []
+        for trial in range(150):
+            h, w, ey0, expected, search, observed, linked = _random_scene(rng, 200, 0, 8, 40)
+            previous = expected | (rng.random((h, w)) < 0.01)
+            risen = np.roll(expected, -int(rng.integers(1, 8)), axis=0) & ~expected
+            given = (lambda r=risen: calls.append(1) or r) if lazy else risen
+            new = new_material(observed, previous, expected, search, float(rng.choice([1.0, 2.0])), 2.0,
+                               linked=linked, marks=rng.random((h, w)) < 0.2, risen=given)
+            out.append(None if new is None else (new.pixels, new.blobs, new.at_foot_mm2, new.arc_deg, new.mask))
+        return out, len(calls)
+
+    fast, made = run(35, lazy=True)
+    monkeypatch.setattr(tangle, "labelled_on_its_box", _whole_mask_labelling)
+    plain, _ = run(35, lazy=False)
+    counted = 0
+    for trial, (a, b) in enumerate(zip(fast, plain)):
+        assert (a is None) == (b is None), trial
+        if a is not None:
+            counted += a[0] > 0
+            assert a[:4] == b[:4] and np.array_equal(a[4], b[4]), trial
+    assert counted > 20 and 0 < made < len(fast)
+
+
+def test_lowest_rows_per_label_and_luma_chroma_of_small_shapes():
+    """lowest_rows reads each of up to four labels asked on its own and gathers the pixels of more: both give
+    connectedComponentsWithStats' lowest rows; _luma_chroma splits (h, w, 3) images into planes, including the
+    (n, 1, 3) and (1, k, 3) arrays detectable_fraction passes, and reads (n, 3) rows as before."""
+    from octoprint_printwatch.core.masks import components, lowest_rows
+    rng = np.random.default_rng(36)
+    for trial in range(200):
+        count, labels, _ = components(_blob_scene(rng))
+        _, _, stats, _ = cv2.connectedComponentsWithStats((labels > 0).astype(np.uint8), connectivity=8)
+        asked = np.zeros(count, bool)
+        asked[rng.choice(np.arange(1, count), size=min(count - 1, trial % 8), replace=False)] = True
+        want = np.where(asked, stats[:, cv2.CC_STAT_TOP] + stats[:, cv2.CC_STAT_HEIGHT] - 1, -1)
+        assert np.array_equal(lowest_rows(labels, asked), want), trial
+    for shape in ((7, 1, 3), (1, 5, 3), (9, 3), (1, 1, 3)):
+        values = rng.uniform(0, 255, shape).astype(np.float32)
+        for fast, plain in zip(_luma_chroma(values), _luma_chroma_plain(values)):
+            assert fast.shape == plain.shape and np.array_equal(fast, plain), shape
