@@ -494,6 +494,9 @@ class CameraState:
     #: the part rising and the print passed, since it was last unusable (None: none): decide's standing offset
     #: (lowest_missing_while_rising)
     missing_while_rising: tuple[float, float | None] | None = None
+    #: the most material it missed (%) at the checks that passed since it was last unusable (None: none yet):
+    #: decide's "visibly grows" rule where readings to the pixel stand in (verdict.missing_since_first_look)
+    most_missing: float | None = None
     #: the highest share of its newest band covered by the part's material so far (core/nest.py)
     band_coverage: float | None = None
     #: its newest band's texture at its previous check (ShapeResult.band_texture; None: not usable there, its
@@ -610,6 +613,8 @@ class CheckRunner:
                           if state.last_band_texture is not None}
         while_rising = {name: state.missing_while_rising for name, state in self.cameras.items()
                         if state.missing_while_rising is not None}
+        most_missing_before = {name: state.most_missing for name, state in self.cameras.items()
+                               if state.most_missing is not None}
         for name, state in self.cameras.items():
             frame = frames.get(name)
             background = self.backgrounds.get(name)
@@ -704,7 +709,8 @@ class CheckRunner:
                                   rise_before=rise_before, missing_before=missing_before,
                                   missing_at_rise=missing_at_rise, band_texture_before=texture_before,
                                   held_rise_before=held_rise_before, missing_while_rising=while_rising,
-                                  first_rise_reading=not self.rise_ever_read)
+                                  first_rise_reading=not self.rise_ever_read,
+                                  most_missing_before=most_missing_before)
         verdict, reasons = decide(**self.last_decision)
         for name, state in self.cameras.items():
             r = shape.get(name)
@@ -714,7 +720,10 @@ class CheckRunner:
                 state.rise_missing, state.rise_quiet = None, 0
                 state.last_band_texture = None
                 state.missing_while_rising = None
+                state.most_missing = None
                 continue
+            if verdict == "ok":   # (a check that failed is no healthy look: a part knocked over misses much)
+                state.most_missing = max(r.missing_pct, state.most_missing or 0.0)
             state.last_band_texture = None if r.first_look else r.band_texture
             state.last_extra, state.last_missing, state.last_foreign = r.extra_pct, r.missing_pct, r.foreign_mask
             rise_before_this = state.last_rise

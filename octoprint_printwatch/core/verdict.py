@@ -105,6 +105,47 @@ def rise_since_previous_check(result: ShapeResult) -> float | None:
     return result.growth_pct if result.growth_pct is not None else result.coarse_growth_pct
 
 
+def rise_readings(usable: Mapping[str, ShapeResult]) -> list[float]:
+    """The readings of the part's rise since the previous check (% of the expected) that say whether it grows: the
+    fine ones where two or more views read it finely, or the only usable view does; else each view's fine reading or,
+    where it has none, its reading to the pixel (:func:`rise_since_previous_check`). A view that sees the part small
+    reads its rise only to the pixel, so where one view reads it finely beside it (or none does), the fine readings
+    alone are one view's reading or none; the reading to the pixel is +-25 %, but a rise of 100 % read so is no
+    stopped part (0 +- a pixel step)."""
+    fine = [r.growth_pct for r in usable.values() if r.growth_pct is not None]
+    if len(fine) >= 2 or (fine and len(usable) == 1):
+        return fine
+    return [reading for r in usable.values() if (reading := rise_since_previous_check(r)) is not None]
+
+
+def _rises(readings: Sequence[float]) -> bool:
+    return bool(readings) and float(np.median(readings)) >= VISIBLY_RISING_PCT
+
+
+def visibly_rising_finely(usable: Mapping[str, ShapeResult]) -> bool:
+    """Whether the median of the usable views' fine readings of the rise is :data:`VISIBLY_RISING_PCT` or more
+    (every reading counts, one that sank too: it is evidence against growth)."""
+    return _rises([r.growth_pct for r in usable.values() if r.growth_pct is not None])
+
+
+def visibly_rising(usable: Mapping[str, ShapeResult]) -> bool:
+    """Whether the part's outline rises as the model says: :func:`visibly_rising_finely`, or the median of
+    :func:`rise_readings` (readings to the pixel standing in for too few fine ones) is :data:`VISIBLY_RISING_PCT` or
+    more."""
+    return visibly_rising_finely(usable) or _rises(rise_readings(usable))
+
+
+def missing_since_first_look(result: ShapeResult, most_missing_before: Mapping[str, float] | None) -> bool:
+    """Whether a view misses no more of the part, by half its threshold, than it did at one of its earlier checks
+    (``most_missing_before``: the most it missed at the checks that passed since it was last unusable; None or
+    absent: no such check). A face the view cannot tell from what lies behind it is missing from the view's first look on; a part
+    that tipped or moved away goes missing at once (seed 30 ``053_detach``: 0 -> 20.7 % in one check)."""
+    before = (most_missing_before or {}).get(result.camera)
+    return before is not None and result.missing_pct - before < result.threshold / 2.0
+
+
+
+
 def unseen_by_the_other_views(result: ShapeResult, usable: Mapping[str, ShapeResult]) -> bool:
     """True when ``result`` fails on extra material (more than half its missing material) that every other ``usable``
     view not read against a relit background (at least one) does not see at all (:func:`sees_nothing_extra`):
@@ -444,6 +485,10 @@ def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings,
     rose_before = set() if not unanimous or a_view_reads_the_full_rise(usable) else {
         cam for cam in measured if held_a_rise(held_rise_before, cam)}
     stalled, bare_band = stall_rules({cam: r.growth_pct for cam, r in measured.items()}, rose_before)
+    # One view's fine reading of no rise is no median where the other views read the rise to the pixel (a part seen
+    # small) and with them the part visibly rises: that view's top is a face it cannot tell from what lies behind it
+    if stalled and len(measured) < 2 and visibly_rising(usable):
+        stalled, bare_band = False, []
     growth_since = "since the previous check"
     # Where one check's rise is too small for any reading in a view (2-3 px: a part seen small, checks a few
     # layers apart), its reading over more checks (``ShapeResult.span_growth_pct``, as fine, but from an older
@@ -578,7 +623,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
            band_texture_before: Mapping[str, float] | None = None,
            held_rise_before: Mapping[str, float] | None = None,
            missing_while_rising: Mapping[str, tuple[float, float | None]] | None = None,
-           first_rise_reading: bool = False) -> tuple[str, list[str]]:
+           first_rise_reading: bool = False,
+           most_missing_before: Mapping[str, float] | None = None) -> tuple[str, list[str]]:
     """The combined decision rule -> (verdict, reasons).
 
     * A camera counts only when it gave a frame and its background still matches the bed
@@ -596,7 +642,9 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       views read against a relit background (``ShapeResult.relit``) count only
       alongside a failing view that was not (in no share of views, nor for loose material or a layer shift),
     * while the part visibly grows (median growth >= 50 %), a camera failing on missing material
-      alone does not count (a face the colour of what lies behind it looks missing); nor does missing
+      alone does not count (a face the colour of what lies behind it looks missing); where fewer than two views
+      read the rise finely, the readings to the pixel stand in (:func:`rise_readings`), for missing material the
+      view already missed at a check that passed (``most_missing_before``: :func:`missing_since_first_look`); nor does missing
       material alone from no more than half of the usable cameras not relit unless the part stalled, nor from a
       camera's first look at the part (``ShapeResult.first_look``: the growth test needs a second one), nor
       where, as a group, it is not the background (``ShapeResult.background_missing_pct``: a face of nearly
@@ -606,7 +654,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       25 % of the newest band, or half the threshold overall, in a view that saw no rise, finely or, where it
       reads the rise only to the pixel, coarsely): the median over
       cameras of the observed rise of the part's upper outline since the previous check (readings below
-      -15 %, a sunk outline, left out) is below ``min_growth_pct`` of the expected rise; or, unless a
+      -15 %, a sunk outline, left out) is below ``min_growth_pct`` of the expected rise (not where one view
+      reads it finely and, with the other views' readings to the pixel, the part visibly rises); or, unless a
       top surface closes, when two or more cameras measured growth, its median is under 50 % and two views
       that saw under 50 % each miss 15 % of the newest band or half the threshold overall (strands piling on
       a stopped part lift the outline a little but fill no band; a part that stopped before the previous check
@@ -721,11 +770,17 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
         # a runout does not (it stalls the growth, and the part's top is gone from most views).
         failing = [r for r in failing if r not in missing_only]
     # (here every reading counts: a sinking outline is evidence against growth, e.g. a part knocked over)
-    rising = [r.growth_pct for r in usable.values() if r.growth_pct is not None]
-    if rising and float(np.median(rising)) >= 50.0:
+    if visibly_rising_finely(usable):
         # The part's outline rises as the model says: "material missing" without any extra material
         # is then a face the camera cannot tell from what lies behind it, not a runout.
         failing = [r for r in failing if r.decisive or r.extra_pct * 2.0 > r.missing_pct]
+    elif visibly_rising(usable):
+        # ... so it does where fewer than two views read the rise finely and the readings to the pixel of a part seen
+        # small stand in (rise_readings: +-25 %), for missing material the view already read at an earlier check (a
+        # face it cannot tell from what lies behind it, there since its first look; a part that tipped over goes
+        # missing at once while its outline's top may still read a rise)
+        failing = [r for r in failing if r.decisive or r.extra_pct * 2.0 > r.missing_pct
+                   or not missing_since_first_look(r, most_missing_before)]
     # Extra material alone that appeared at once in one camera of a stereo pair whose partner, looking from
     # nearly the same side, sees none at all (and passes) is not standing there: a hair of stringing (18 %
     # "extra" in one view of a pair, 0 in the other; docs/detection-shadows.md). Material new since the
