@@ -144,8 +144,6 @@ def missing_since_first_look(result: ShapeResult, most_missing_before: Mapping[s
     return before is not None and result.missing_pct - before < result.threshold / 2.0
 
 
-
-
 def unseen_by_the_other_views(result: ShapeResult, usable: Mapping[str, ShapeResult]) -> bool:
     """True when ``result`` fails on extra material (more than half its missing material) that every other ``usable``
     view not read against a relit background (at least one) does not see at all (:func:`sees_nothing_extra`):
