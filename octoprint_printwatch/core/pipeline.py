@@ -495,7 +495,7 @@ class CameraState:
     #: (lowest_missing_while_rising)
     missing_while_rising: tuple[float, float | None] | None = None
     #: the most material it missed (%) at the checks that passed since it was last unusable (None: none yet):
-    #: decide's "visibly grows" rule where readings to the pixel stand in (verdict.missing_since_first_look)
+    #: decide's "visibly grows" rule where readings to the pixel stand in (verdict.missed_as_much_before)
     most_missing: float | None = None
     #: the highest share of its newest band covered by the part's material so far (core/nest.py)
     band_coverage: float | None = None

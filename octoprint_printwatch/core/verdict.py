@@ -105,7 +105,7 @@ def rise_since_previous_check(result: ShapeResult) -> float | None:
     return result.growth_pct if result.growth_pct is not None else result.coarse_growth_pct
 
 
-def rise_readings(usable: Mapping[str, ShapeResult]) -> list[float]:
+def readings_of_the_rise(usable: Mapping[str, ShapeResult]) -> list[float]:
     """The readings of the part's rise since the previous check (% of the expected) that say whether it grows: the
     fine ones where two or more views read it finely, or the only usable view does; else each view's fine reading or,
     where it has none, its reading to the pixel (:func:`rise_since_previous_check`). A view that sees the part small
@@ -113,8 +113,18 @@ def rise_readings(usable: Mapping[str, ShapeResult]) -> list[float]:
     alone are one view's reading or none; the reading to the pixel is +-25 %, but a rise of 100 % read so is no
     stopped part (0 +- a pixel step)."""
     fine = [r.growth_pct for r in usable.values() if r.growth_pct is not None]
-    if len(fine) >= 2 or (fine and len(usable) == 1):
-        return fine
+    return fine if enough_rise_readings(fine, usable) else each_views_rise(usable)
+
+
+def enough_rise_readings(readings: Sequence[float], usable: Mapping[str, ShapeResult]) -> bool:
+    """Whether ``readings`` of the rise make a median: two or more, or the only usable view's (a one-camera rig has no
+    other view to ask)."""
+    return len(readings) >= 2 or (bool(readings) and len(usable) == 1)
+
+
+def each_views_rise(usable: Mapping[str, ShapeResult]) -> list[float]:
+    """Each usable view's reading of the rise since its previous check, fine or else to the pixel
+    (:func:`rise_since_previous_check`), where it has one."""
     return [reading for r in usable.values() if (reading := rise_since_previous_check(r)) is not None]
 
 
@@ -130,16 +140,17 @@ def visibly_rising_finely(usable: Mapping[str, ShapeResult]) -> bool:
 
 def visibly_rising(usable: Mapping[str, ShapeResult]) -> bool:
     """Whether the part's outline rises as the model says: :func:`visibly_rising_finely`, or the median of
-    :func:`rise_readings` (readings to the pixel standing in for too few fine ones) is :data:`VISIBLY_RISING_PCT` or
-    more."""
-    return visibly_rising_finely(usable) or _rises(rise_readings(usable))
+    :func:`readings_of_the_rise` (readings to the pixel standing in for too few fine ones) is
+    :data:`VISIBLY_RISING_PCT` or more."""
+    return visibly_rising_finely(usable) or _rises(readings_of_the_rise(usable))
 
 
-def missing_since_first_look(result: ShapeResult, most_missing_before: Mapping[str, float] | None) -> bool:
+def missed_as_much_before(result: ShapeResult, most_missing_before: Mapping[str, float] | None) -> bool:
     """Whether a view misses no more of the part, by half its threshold, than it did at one of its earlier checks
     (``most_missing_before``: the most it missed at the checks that passed since it was last unusable; None or
-    absent: no such check). A face the view cannot tell from what lies behind it is missing from the view's first look on; a part
-    that tipped or moved away goes missing at once (seed 30 ``053_detach``: 0 -> 20.7 % in one check)."""
+    absent: no such check). A face the view cannot tell from what lies behind it is missing from the view's first
+    look on; a part that tipped or moved away goes missing at once (seed 30 ``053_detach``: 0 -> 20.7 % in one
+    check)."""
     before = (most_missing_before or {}).get(result.camera)
     return before is not None and result.missing_pct - before < result.threshold / 2.0
 
@@ -344,13 +355,10 @@ def rise_for_loose_material(usable: Mapping[str, ShapeResult], growth: Sequence[
     alone it proves nothing (a normal print reads under 50 % at a few checks); here it is only the second
     witness of material new beyond the outline, which such a check of a normal print does not show: a part
     knocked off or stopped under a pile of strands does both."""
-    if len(growth) >= 2 or (growth and len(usable) == 1):
+    if enough_rise_readings(growth, usable):
         return float(np.median(growth))
-    readings = [rise_since_previous_check(r) for r in usable.values()]
-    readings = [g for g in readings if g is not None and g >= SANK_BELOW_PCT]
-    if len(readings) >= 2 or (readings and len(usable) == 1):
-        return float(np.median(readings))
-    return None
+    readings = [g for g in each_views_rise(usable) if g >= SANK_BELOW_PCT]
+    return float(np.median(readings)) if enough_rise_readings(readings, usable) else None
 
 
 def stopped_and_textured(usable: Mapping[str, ShapeResult], settings: DetectionSettings, *,
@@ -641,10 +649,10 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       alongside a failing view that was not (in no share of views, nor for loose material or a layer shift),
     * while the part visibly grows (median growth >= 50 %), a camera failing on missing material
       alone does not count (a face the colour of what lies behind it looks missing); where fewer than two views
-      read the rise finely, the readings to the pixel stand in (:func:`rise_readings`), for missing material the
-      view already missed at a check that passed (``most_missing_before``: :func:`missing_since_first_look`); nor does missing
-      material alone from no more than half of the usable cameras not relit unless the part stalled, nor from a
-      camera's first look at the part (``ShapeResult.first_look``: the growth test needs a second one), nor
+      read the rise finely, the readings to the pixel stand in (:func:`readings_of_the_rise`), for missing material
+      the view already missed at a check that passed (``most_missing_before``: :func:`missed_as_much_before`); nor
+      does missing material alone from no more than half of the usable cameras not relit unless the part stalled,
+      nor from a camera's first look at the part (``ShapeResult.first_look``: the growth test needs a second one), nor
       where, as a group, it is not the background (``ShapeResult.background_missing_pct``: a face of nearly
       the bed's colour), nor from a view that missed as much while it saw the part rise (``missing_while_rising``:
       :func:`standing_offset`);
@@ -774,11 +782,11 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
         failing = [r for r in failing if r.decisive or r.extra_pct * 2.0 > r.missing_pct]
     elif visibly_rising(usable):
         # ... so it does where fewer than two views read the rise finely and the readings to the pixel of a part seen
-        # small stand in (rise_readings: +-25 %), for missing material the view already read at an earlier check (a
-        # face it cannot tell from what lies behind it, there since its first look; a part that tipped over goes
-        # missing at once while its outline's top may still read a rise)
+        # small stand in (readings_of_the_rise: +-25 %), for missing material the view already read at an earlier
+        # check (a face it cannot tell from what lies behind it, there since its first look; a part that tipped over
+        # goes missing at once while its outline's top may still read a rise)
         failing = [r for r in failing if r.decisive or r.extra_pct * 2.0 > r.missing_pct
-                   or not missing_since_first_look(r, most_missing_before)]
+                   or not missed_as_much_before(r, most_missing_before)]
     # Extra material alone that appeared at once in one camera of a stereo pair whose partner, looking from
     # nearly the same side, sees none at all (and passes) is not standing there: a hair of stringing (18 %
     # "extra" in one view of a pair, 0 in the other; docs/detection-shadows.md). Material new since the

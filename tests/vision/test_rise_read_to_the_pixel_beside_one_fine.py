@@ -1,5 +1,5 @@
 """Whether the part grows, where fewer than two views read its rise finely (verdict.decide, verdict.visibly_rising,
-verdict.rise_readings): a view that sees the part small reads its rise since the previous check only to the pixel
+verdict.readings_of_the_rise): a view that sees the part small reads its rise since the previous check only to the pixel
 (``coarse_growth_pct``), and that reading stands in beside the fine ones.
 
 What a user would notice: a normal print paused as "material missing: runout, clog or stopped print?" or "the part has
@@ -24,7 +24,7 @@ from dataclasses import replace
 
 from octoprint_printwatch.core.settings import DetectionSettings
 from octoprint_printwatch.core.shape_check import ShapeResult
-from octoprint_printwatch.core.verdict import decide, missing_since_first_look, rise_readings, visibly_rising
+from octoprint_printwatch.core.verdict import decide, missed_as_much_before, readings_of_the_rise, visibly_rising
 
 
 def view(name: str, *, missing: float = 0.0, band_missing: float = 0.0, growth: float | None = None,
@@ -41,8 +41,8 @@ def test_the_only_usable_view_reading_the_rise_to_the_pixel_shows_the_part_growi
     # 132.5 %; at its first look (check 7, passed: a first look's missing material waits) it missed 16.1 %
     s1 = view("s1", missing=14.2, band_missing=54.8, coarse=132.5)
     before = {"s1": 16.1}
-    assert rise_readings({"s1": s1}) == [132.5] and visibly_rising({"s1": s1})
-    assert missing_since_first_look(s1, before)
+    assert readings_of_the_rise({"s1": s1}) == [132.5] and visibly_rising({"s1": s1})
+    assert missed_as_much_before(s1, before)
     assert decide({"s1": s1}, {}, s, most_missing_before=before)[0] == "ok"
     # check 10: 17.1 % missing, within half the threshold of the most it missed at a check that passed
     assert decide({"s1": replace(s1, missing_pct=17.1, error_pct=17.1)}, {}, s, most_missing_before=before)[0] == "ok"
@@ -58,7 +58,7 @@ def test_missing_material_that_appears_at_once_is_no_face_the_view_cannot_see():
     # seed 30 ``053_detach`` check 11 (one camera, black on glass): the part tipped over 54 deg and slid 13 mm; s0
     # misses 20.7 % where it missed nothing at its earlier checks, while its outline's top reads 140 % to the pixel
     tipped = view("s0", missing=20.7, band_missing=4.7, coarse=140.0)
-    assert visibly_rising({"s0": tipped}) and not missing_since_first_look(tipped, {"s0": 0.0})
+    assert visibly_rising({"s0": tipped}) and not missed_as_much_before(tipped, {"s0": 0.0})
     assert decide({"s0": tipped}, {}, s, most_missing_before={"s0": 0.0})[0] == "fail"
 
 
@@ -66,18 +66,18 @@ def test_one_fine_reading_of_no_rise_is_no_stall_where_another_view_reads_the_fu
     s = DetectionSettings()
     # seed 31 ``033_detach`` check 13: s1 0 % finely, 9.8 % missing; s0 passes, 110 % to the pixel
     views = {"s0": view("s0", coarse=110.0), "s1": view("s1", missing=9.8, band_missing=12.1, growth=0.0)}
-    assert sorted(rise_readings(views)) == [0.0, 110.0]
+    assert sorted(readings_of_the_rise(views)) == [0.0, 110.0]
     assert decide(views, {}, s)[0] == "ok"
     # where the other view reads the stop too, to the pixel, the part stalled
     assert decide({**views, "s0": view("s0", coarse=25.0)}, {}, s)[0] == "fail"
     # two views reading finely are a median of their own: a third view's reading to the pixel does not join it
     fine = {**views, "s2": view("s2", growth=0.0, missing=4.0)}
-    assert rise_readings(fine) == [0.0, 0.0]
+    assert readings_of_the_rise(fine) == [0.0, 0.0]
     assert decide(fine, {}, s)[0] == "fail"
 
 
 def test_a_one_camera_rigs_fine_reading_is_its_own():
     s = DetectionSettings()
     alone = {"s0": view("s0", missing=9.8, band_missing=30.0, growth=0.0)}
-    assert rise_readings(alone) == [0.0] and not visibly_rising(alone)
+    assert readings_of_the_rise(alone) == [0.0] and not visibly_rising(alone)
     assert decide(alone, {}, s)[0] == "fail"
