@@ -416,6 +416,30 @@ class Stall:
     since: str
     #: views whose newest band is bare where it read solid before (a nest of strands over a stopped part)
     bare_band: list[ShapeResult]
+    #: the limit (% of the expected rise) the readings were held to: fine_stall_limit for fine readings, else the
+    #: settings' ``min_growth_pct``
+    limit: float | None = None
+
+
+#: A fine reading of the rise (``growth_pct``, ``span_growth_pct``: growth.profile_growth reads one only where the model's
+#: top rises a median of 1.5 x 4 px) reads a stall up to this (% of the expected rise), just above one pixel of the
+#: smallest such rise (1/6, 16.7 %, in float32): a stalled part reads 0 +- a pixel, and under the 15 % of
+#: ``min_growth_pct`` alone its one-pixel reading of a 6-px rise read as a part rising (cross-check seed 33
+#: ``034_spaghetti``, seed 28 ``024_runout``: every view 16.7 % with the newest layers missing). Before any onset on the
+#: development seeds 20, 24 and 27-33, fine or span readings fell in 15-17 % at 4 checks (one of a normal print, beside a
+#: view reading 75 %). A reading to the pixel (``coarse_growth_pct``, a rise of 4-6 px: a pixel is 17-25 %) keeps
+#: ``min_growth_pct``: such readings of 16.7-25 % stood before an onset at 11 checks, and one more paused a print there.
+FINE_STALL_PCT = 17.0
+
+
+def _rounded_under(value: float, limit: float) -> str:
+    """``value`` (%) to the unit, or to a tenth where the unit would read it at or over ``limit`` (16.7 % under 17)."""
+    return f"{value:.0f}" if round(value) < limit else f"{value:.1f}"
+
+
+def fine_stall_limit(settings: DetectionSettings) -> float:
+    """The limit a fine reading of the rise (one check's, or over its span) reads a stall under (FINE_STALL_PCT)."""
+    return max(settings.min_growth_pct, FINE_STALL_PCT)
 
 
 def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings, *, top_closing: bool,
@@ -432,6 +456,8 @@ def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings,
     # 0 +- one pixel step, about 15 % of a check's rise): that camera was fooled at this check or the
     # previous one (a top face the colour of what lies behind it); readings below -15 % are left out.
     band_coverage_before = band_coverage_before or {}
+    # (fine readings, one check's or over a span, read a stall within a pixel of none: FINE_STALL_PCT)
+    fine_limit = fine_stall_limit(settings)
 
     def stall_rules(read: Mapping[str, float], stopped: Collection[str] = ()) -> tuple[bool, list]:
         """Whether the part stalled by the rules below on the growth readings ``read`` (camera -> %, each of -15 %
@@ -445,7 +471,7 @@ def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings,
         # as a whole, like the bed: then only the newest band itself gone counts)
         # (a view whose rise only reads to the pixel, ``coarse_growth_pct``, and that reads none, is such a view too:
         # the stall is decided on the fine readings; the missing layers show where they show)
-        still = ({cam for cam, reading in read.items() if reading < settings.min_growth_pct}
+        still = ({cam for cam, reading in read.items() if reading < fine_limit}
                  | {cam for cam, r in usable.items()
                     if cam not in read and r.growth_pct is None and r.coarse_growth_pct is not None
                     and r.coarse_growth_pct < settings.min_growth_pct})
@@ -453,7 +479,7 @@ def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings,
                         or (not top_closing and (usable[cam].missing_pct >= usable[cam].threshold / 2.0
                                                  or cam in stopped))
                         for cam in still)
-        stalled = bool(growth) and float(np.median(growth)) < settings.min_growth_pct and band_gone
+        stalled = bool(growth) and float(np.median(growth)) < fine_limit and band_gone
         # A part rising at under half the expected rate while two views that see it slow each miss part of its
         # newest band has slowed, not been misread: strands piling on a stopped part lift the outline a little
         # but fill no band; a face the colour of the bed reads missing but its outline rises fully.
@@ -470,11 +496,11 @@ def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings,
         # in the bed's colour reads bare at every check) and that saw no rise or could not measure one. Not where
         # a top surface closes (a smooth top skin may look like the bed).
         bare_band = [r for r in usable.values()
-                     if (r.growth_pct is None or r.growth_pct < settings.min_growth_pct)
+                     if (r.growth_pct is None or r.growth_pct < fine_limit)
                      and r.band_part_coverage is not None and r.band_part_coverage < NEST_MAX_COVERAGE
                      and band_coverage_before.get(r.camera, 0.0) >= SOLID_MIN_COVERAGE]
         stalled = stalled or (not top_closing and bool(growth)
-                              and float(np.median(growth)) < settings.min_growth_pct and bool(bare_band))
+                              and float(np.median(growth)) < fine_limit and bool(bare_band))
         return stalled, bare_band
 
     measured = {cam: r for cam, r in usable.items() if r.growth_pct is not None and r.growth_pct >= SANK_BELOW_PCT}
@@ -487,7 +513,7 @@ def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings,
     # misread at one check reads 0 in one view and twice the rise in another, then rises again).
     # Nor while a view's one-check reading still reads some rise: only where every one reads a stall (a view reading
     # -8 % beside one reading 29 % over a face it misses all along is a resized frame's pixel step, not a stop).
-    unanimous = all(r.growth_pct < settings.min_growth_pct for r in measured.values())
+    unanimous = all(r.growth_pct < fine_limit for r in measured.values())
     rose_before = set() if not unanimous or a_view_reads_the_full_rise(usable) else {
         cam for cam in measured if held_a_rise(held_rise_before, cam)}
     stalled, bare_band = stall_rules({cam: r.growth_pct for cam, r in measured.items()}, rose_before)
@@ -527,6 +553,7 @@ def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings,
     # not rise in it) at every check since (``missing_at_rise``: its missing material at that check,
     # CameraState.rise_missing, missing_since_rise) counts as well, its missing material measured against that
     # check: the part rose, then stopped, and its newest layers went missing since.
+    limit = fine_limit if stalled else settings.min_growth_pct
     rise_before, missing_before = rise_before or {}, missing_before or {}
     missing_at_rise = missing_at_rise or {}
     rose = {cam: (missing_at_rise[cam] if cam in missing_at_rise else missing_before.get(cam))
@@ -540,7 +567,7 @@ def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings,
                               and usable[cam].missing_pct - rose[cam] >= usable[cam].threshold / 2.0
                               for cam in coarse))
     if coarse_stalled:
-        growth = list(coarse.values())
+        growth, limit = list(coarse.values()), settings.min_growth_pct
     stalled = stalled or coarse_stalled
     # Views that each held a rise over their last readings (``held_rise_before``) and read none now, STOPPED_VIEWS of
     # them, stalled with little missing yet (a stop late in the interval leaves the newest layers too thin to miss
@@ -561,7 +588,7 @@ def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings,
     if not stalled and not top_closing and first_rise_reading and stopped_at_the_first_reading(
             usable, readings, settings, missing_before=missing_before):
         stalled, growth = True, list(readings.values())
-    return Stall(stalled, growth, growth_since, bare_band)
+    return Stall(stalled, growth, growth_since, bare_band, limit)
 
 
 def stopped_at_the_first_reading(usable: Mapping[str, ShapeResult], readings: Mapping[str, float],
@@ -732,6 +759,7 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
                          rise_before=rise_before, missing_before=missing_before, missing_at_rise=missing_at_rise,
                          held_rise_before=held_rise_before, first_rise_reading=first_rise_reading)
     stalled, growth, growth_since, bare_band = stall.stalled, stall.growth, stall.since, stall.bare_band
+    stall_limit = stall.limit if stall.limit is not None else settings.min_growth_pct
     size_fail, size_usable = [], 0
     for key, entry in size.items():
         error = entry.get("error_pct") if isinstance(entry, Mapping) else None
@@ -811,8 +839,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     fail_reasons = [reason for r in (failing if shape_fail else []) for reason in r.reasons]
     if stalled:
         fail_reasons.append(f"the part has not grown as expected {growth_since}: "
-                            f"{float(np.median(growth)):.0f}% of the expected rise seen "
-                            f"(median of {len(growth)} camera(s), limit {settings.min_growth_pct:g}%): "
+                            f"{_rounded_under(float(np.median(growth)), stall_limit)}% of the expected rise seen "
+                            f"(median of {len(growth)} camera(s), limit {stall_limit:g}%): "
                             f"runout, clog or a stopped print?")
         if not top_closing:
             fail_reasons.extend(f"{r.camera}: the newest layers show the part's colours over "
