@@ -428,7 +428,8 @@ class Stall:
 #: ``034_spaghetti``, seed 28 ``024_runout``: every view 16.7 % with the newest layers missing). Before any onset on the
 #: development seeds 20, 24 and 27-33, fine or span readings fell in 15-17 % at 4 checks (one of a normal print, beside a
 #: view reading 75 %). A reading to the pixel (``coarse_growth_pct``, a rise of 4-6 px: a pixel is 17-25 %) keeps
-#: ``min_growth_pct``: such readings of 16.7-25 % stood before an onset at 11 checks, and one more paused a print there.
+#: ``min_growth_pct``: such readings of 16.7-25 % stood before an onset at 11 checks (normal prints among them), and
+#: with 17 % for them too one view in the bed's colour paused seed 28 ``023_layer_shift`` before its onset.
 FINE_STALL_PCT = 17.0
 
 
