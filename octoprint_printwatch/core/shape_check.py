@@ -131,6 +131,9 @@ class ShapeResult:
     best_candidate: tuple[int, int] | None = None
     #: ... and the one of them that puts the expected upper outline on the observed one (outline_candidate)
     outline_best_candidate: tuple[int, int] | None = None
+    #: the share of the expected part the material covers where the outline was laid (0-1; Placement.coverage):
+    #: under 1 where faces cannot be told from what lies behind them
+    outline_coverage: float = 1.0
     palette: np.ndarray | None = field(default=None, repr=False)         # (k, 3) the part's colours seen now
     #: of the missing material, what shows the background itself (% of expected; % of the newest band): the
     #: rest passes for the background pixel by pixel but not as a group, a face of nearly its colour
@@ -541,6 +544,8 @@ class Placement:
     best_candidate: tuple[int, int] | None = None
     candidates: np.ndarray | None = None
     outline_best: tuple[int, int] | None = None
+    #: the share of the expected part the material (strong cues or not) covers at ``shift`` (0-1)
+    coverage: float = 1.0
 
 
 def place_outline(observed: np.ndarray, observed_strong: np.ndarray, expected: np.ndarray, band: np.ndarray,
@@ -585,7 +590,9 @@ def place_outline(observed: np.ndarray, observed_strong: np.ndarray, expected: n
             best_candidate, shift_candidates = align_candidates(anchor_mask & prior, template, shift_bound,
                                                                 candidates=np.array([on_edges]), max_drift=max_drift)
     outline_best = outline_candidate(anchor_mask & prior, expected, shift_candidates) if track_candidates else None
-    return Placement((dx, dy), best_candidate, shift_candidates, outline_best)
+    part = np.count_nonzero(expected)
+    coverage = (np.count_nonzero(observed & prior & shift_mask(expected, dx, dy)) / part) if part else 1.0
+    return Placement((dx, dy), best_candidate, shift_candidates, outline_best, float(coverage))
 
 
 def zone_places(placement: Placement, first_look: bool) -> np.ndarray:
@@ -913,7 +920,7 @@ def check_shape(
         reasons=verdict.reasons, changed_bed_fraction=changed, relit=evidence.relit, observed_mask=observed_full,
         palette=palette_now,
         decisive=decisive, shift_candidates=placement.candidates, best_candidate=placement.best_candidate,
-        outline_best_candidate=placement.outline_best,
+        outline_best_candidate=placement.outline_best, outline_coverage=placement.coverage,
         new_outside=new_outside, moved_px=moved_px, first_look=last_observed is None,
         background_missing_pct=background_missing_pct, background_band_missing_pct=background_band_missing_pct,
         band_part_coverage=band_coverage, coarse_growth_pct=rise.coarse_growth_pct, foreign_mask=foreign_full,
