@@ -453,9 +453,9 @@ class CameraState:
     #: the anchor is held (the part was tall enough for an unambiguous alignment, or a calibration offset
     #: was learned): calibration error does not change during a print
     frozen: bool = False
-    #: the share of the expected part the material covered where its last passing look laid the outline
-    #: (ShapeResult.outline_coverage; None: no passing look yet): a view that saw only part of the part placed the
-    #: outline by the faces it saw (CheckRunner.set_aside_partial_views)
+    #: the largest share of the expected part the material covered where its passing looks laid the outline
+    #: (ShapeResult.outline_coverage; None: no passing look yet): a view that never saw more than part of the part
+    #: placed the outline by the faces it saw (CheckRunner.set_aside_partial_views)
     seen_share: float | None = None
     #: (k, 2) shifts no passing check so far could tell apart (each narrows them; _second_look)
     shift_candidates: np.ndarray | None = None
@@ -685,7 +685,7 @@ class CheckRunner:
                 state.palette = result.palette
             if places:
                 state.previous_mask = result.observed_mask
-                state.seen_share = result.outline_coverage
+                state.seen_share = max(result.outline_coverage, state.seen_share or 0.0)
                 state.placed(result, shape_args["max_drift"],
                              tall=_silhouette_rows(regions.silhouette) >= 2 * regions.max_shift_px)
         self._learn_calibration_offsets(z, shape, shape_inputs, errors)
@@ -761,8 +761,8 @@ class CheckRunner:
 
     def set_aside_partial_views(self, verdict: str, reasons: list[str], history_before: Sequence,
                                 placed_at: Mapping[str, Sequence[tuple[int, int]]]) -> tuple[str, list[str]]:
-        """The failing check decided again without the failing views that never saw the part whole (their last
-        passing look's material covered under SEEN_WHOLE_SHARE of it, or no look passed since its first), where a
+        """The failing check decided again without the failing views that never saw the part whole (no passing
+        look's material covered SEEN_WHOLE_SHARE of it, or no look passed since its first), where a
         view that saw it whole passes: ``(verdict, reasons)``, ok only if the rest pass.
 
         A view whose faces are the colour of the bed or the backdrop separates only some of them, and the overlap
@@ -784,7 +784,7 @@ class CheckRunner:
         if again != "ok":
             return verdict, reasons
         return "ok", [*again_reasons, f"{', '.join(partial)}: failing, but never saw the part whole (under "
-                                      f"{SEEN_WHOLE_SHARE:.0%} of it at its last passing look) while "
+                                      f"{SEEN_WHOLE_SHARE:.0%} of it at any passing look) while "
                                       f"{', '.join(witnesses)} did and pass{'es' if len(witnesses) == 1 else ''}"]
 
     def _second_look(self, name: str, result: ShapeResult, shape_args: dict,
