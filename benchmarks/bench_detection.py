@@ -45,7 +45,6 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from octoprint_printwatch.core.pipeline import CheckRunner, prepare_job  # noqa: E402
-from octoprint_printwatch.core.verdict import decide  # noqa: E402
 from octoprint_printwatch.core.recording import load_recording  # noqa: E402
 from octoprint_printwatch.core.seed_rules import SEED_THRESHOLD_PCT, seed_check, seed_error  # noqa: E402
 from octoprint_printwatch.core.settings import DetectionSettings  # noqa: E402
@@ -279,7 +278,7 @@ def evaluate(folder: Path, settings: DetectionSettings) -> dict:
                 mixed_errors[name] = seed_error(ours.observed_mask, view.silhouette)
                 mixed_fail |= mixed_errors[name] > SEED_THRESHOLD_PCT
         n_cams = max(1, len(result.shape))
-        shape_only, _ = decide(**dict(runner.last_decision, size={}))
+        shape_only, _ = runner.decide_again(size={})
         size_errors = {k: v.get("error_pct") for k, v in result.size.items()}
         rows.append({
             "layer": check.layer, "z": check.z, "started": t["failure_started"], "should_flag": t["should_flag"],

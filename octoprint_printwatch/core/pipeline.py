@@ -29,7 +29,8 @@ from .layer_shift import LayerShift, band_reads_shifted
 from .shape_check import ExpectedRegions, ShapeResult, check_shape, not_decisive_where_it_stood
 from .nest import SOLID_MIN_COVERAGE, STALL_READ_BELOW_GROWTH_PCT
 from .verdict import (RISE_HELD_READINGS, band_shifts_of, decide, finest_reading, held_rise, layer_shift_of,
-                      lowest_missing_while_rising, missing_since_rise, rise_since_previous_check)
+                      lowest_missing_while_rising, missing_since_rise, rise_since_previous_check,
+                      without_views_never_seen_whole)
 
 VERDICTS = ("ok", "fail", "unknown")
 
@@ -455,7 +456,7 @@ class CameraState:
     frozen: bool = False
     #: the largest share of the expected part the material covered where its passing looks laid the outline
     #: (ShapeResult.outline_coverage; None: no passing look yet): a view that never saw more than part of the part
-    #: placed the outline by the faces it saw (CheckRunner.set_aside_partial_views)
+    #: placed the outline by the faces it saw (verdict.without_views_never_seen_whole)
     seen_share: float | None = None
     #: (k, 2) shifts no passing check so far could tell apart (each narrows them; _second_look)
     shift_candidates: np.ndarray | None = None
@@ -551,12 +552,6 @@ class CameraState:
         self.last_observed, self.last_observed_z, self.last_observed_shift = mask, z, shift
 
 
-#: A failing view whose last passing look's material covered under this share of the part it laid the outline on
-#: counts only with the views that saw the part whole (CheckRunner.set_aside_partial_views). Measured (helper al,
-#: seeds 30 and 31, 8d1777c): of 18 anchors left by looks covering under 0.6 of the part, 7 lay over 8 px off it
-#: and 22 % of the later checks before an onset failed in that view; of 243 left by looks covering 0.8 or more, 6
-#: and 0.5 %; none between 0.6 and 0.8.
-SEEN_WHOLE_SHARE = 2.0 / 3.0
 #: A first look's chosen shift and its upper-outline match disagree beyond this many pixels (either axis)
 OUTLINE_DISAGREES_PX = 2
 #: a view whose newest band reads shifted on its own (layer_shift.band_reads_shifted) on a part that rose by at least
@@ -593,6 +588,8 @@ class CheckRunner:
         # the last four checks' layer-shift evidence: (had a check before it, {camera: BandShift})
         self.band_shift_history: list[tuple[bool, dict]] = []
         self.last_decision: dict[str, Any] = {}  # the last check's arguments of decide()
+        # ... and the layer-shift history before it and each camera's earlier places (decide_again)
+        self.last_layer_shift_inputs: tuple = ((), {})
         # whether an earlier check gave any view a reading of the rise (decide's first_rise_reading)
         self.rise_ever_read = False
 
@@ -723,9 +720,8 @@ class CheckRunner:
                                   held_rise_before=held_rise_before, missing_while_rising=while_rising,
                                   first_rise_reading=not self.rise_ever_read,
                                   most_missing_before=most_missing_before)
-        verdict, reasons = decide(**self.last_decision)
-        if verdict == "fail":
-            verdict, reasons = self.set_aside_partial_views(verdict, reasons, history_before, placed_at)
+        self.last_layer_shift_inputs = (history_before, placed_at)
+        verdict, reasons = self.decide_again()
         for name, state in self.cameras.items():
             r = shape.get(name)
             if r is None or not r.usable:
@@ -759,33 +755,17 @@ class CheckRunner:
                            unreadable=list(unreadable), shape_seconds=shape_seconds, layer_shift=layer_shift,
                            shape_cpu_seconds=shape_cpu_seconds, top_closing=top_closing)
 
-    def set_aside_partial_views(self, verdict: str, reasons: list[str], history_before: Sequence,
-                                placed_at: Mapping[str, Sequence[tuple[int, int]]]) -> tuple[str, list[str]]:
-        """The failing check decided again without the failing views that never saw the part whole (no passing
-        look's material covered SEEN_WHOLE_SHARE of it, or no look passed since its first), where a
-        view that saw it whole passes: ``(verdict, reasons)``, ok only if the rest pass.
-
-        A view whose faces are the colour of the bed or the backdrop separates only some of them, and the overlap
-        lays the outline where it takes those in: on the dark side or the cast shadow, 5-26 px off the part (cross-check
-        seeds 30-33, benchmarks/outline_residual.py). Held there, the view reads the part beside its outline as
-        missing, extra, a displaced band or a layer shift for the rest of the print, alone. A view that saw the
-        part whole placed it where it is, and a failure of the part is seen from there too."""
-        decision = self.last_decision
-        partial = [name for name, r in decision["shape"].items() if r.usable and not r.passed and not r.first_look
-                   and (self.cameras[name].seen_share or 0.0) < SEEN_WHOLE_SHARE]
-        witnesses = [name for name, r in decision["shape"].items() if r.usable and r.passed and not r.relit
-                     and (self.cameras[name].seen_share or 0.0) >= SEEN_WHOLE_SHARE]
-        if not partial or not witnesses:
+    def decide_again(self, **overrides: Any) -> tuple[str, list[str]]:
+        """(verdict, reasons) of the last check's evidence, :func:`decide`'s arguments changed by ``overrides`` (e.g.
+        ``size={}``: the shape check's verdict alone), a failure decided once more without the views that never saw
+        the part whole (:func:`without_views_never_seen_whole`: they laid their outline by the faces they saw)."""
+        decision = {**self.last_decision, **overrides}
+        verdict, reasons = decide(**decision)
+        if verdict != "fail":
             return verdict, reasons
-        shape = {name: replace(r, usable=False, reasons=[]) if name in partial else r
-                 for name, r in decision["shape"].items()}
-        layer_shift = layer_shift_of(shape, history_before, placed_at=placed_at)
-        again, again_reasons = decide(**{**decision, "shape": shape, "layer_shift": layer_shift})
-        if again != "ok":
-            return verdict, reasons
-        return "ok", [*again_reasons, f"{', '.join(partial)}: failing, but never saw the part whole (under "
-                                      f"{SEEN_WHOLE_SHARE:.0%} of it at any passing look) while "
-                                      f"{', '.join(witnesses)} did and pass{'es' if len(witnesses) == 1 else ''}"]
+        return without_views_never_seen_whole(
+            decision, {name: state.seen_share for name, state in self.cameras.items()},
+            *self.last_layer_shift_inputs) or (verdict, reasons)
 
     def _second_look(self, name: str, result: ShapeResult, shape_args: dict,
                      missing: bool = False, growth_before: float | None = None) -> ShapeResult | None:
