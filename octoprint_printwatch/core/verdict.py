@@ -940,7 +940,10 @@ def without_views_never_seen_whole(decision: Mapping[str, Any],
     witnesses = [name for name, r in shape.items() if r.usable and r.passed and not r.relit and saw_whole(name)]
     if not partial or not witnesses:
         return None
-    kept = {name: replace(r, usable=False, reasons=[]) if name in partial else r for name, r in shape.items()}
+    # (their shape failures and layer-shift readings are set aside, which rest on where the outline lies; their readings
+    # of the part's rise and of loose material stay: a stop or spaghetti is read from the part's own outline)
+    kept = {name: replace(r, passed=True, decisive=False, band_shift=None, moved_px=None, reasons=[])
+            if name in partial else r for name, r in shape.items()}
     again, again_reasons = decide(**{**decision, "shape": kept,
                                      "layer_shift": layer_shift_of(kept, history, placed_at=placed_at)})
     if again != "ok":
