@@ -81,3 +81,12 @@ def test_a_print_seen_partly_by_one_camera_is_not_paused_and_its_spaghetti_is():
     assert [checks[layer]["verdict"] for layer in (60, 80, 100, 120)] == ["ok"] * 4
     assert any("s1: failing, but never saw the part whole" in r for r in checks[120]["reasons"])
     assert checks[200]["verdict"] == "fail"
+
+
+def test_a_stop_the_partial_view_reads_with_the_others_still_pauses_the_print():
+    # the part stopped: no view reads it rising; s1 (never saw it whole) misses the newest layers the model expects,
+    # s0 passes its shape check. The stall rule reads every view's rise and the missing material that corroborates
+    # it, which rest on the part's own outline, not on where s1 laid the expected one.
+    stopped = {"s0": replace(view("s0"), growth_pct=0.0), "s1": replace(view("s1", missing=10.0), growth_pct=0.0)}
+    verdict, reasons = decided(stopped, {"s0": 0.95, "s1": 0.3})
+    assert verdict == "fail" and any("has not grown" in r for r in reasons)
