@@ -935,19 +935,24 @@ def without_views_never_seen_whole(decision: Mapping[str, Any],
     def saw_whole(name: str) -> bool:
         return (seen_share.get(name) or 0.0) >= SEEN_WHOLE_SHARE
 
-    partial = [name for name, r in shape.items() if r.usable and not r.passed and not r.first_look
-               and not saw_whole(name)]
+    partial = [name for name, r in shape.items() if r.usable and not r.first_look and not saw_whole(name)]
     witnesses = [name for name, r in shape.items() if r.usable and r.passed and not r.relit and saw_whole(name)]
-    if not partial or not witnesses:
+    # (a layer-shift reading is the newest band against the outline the view laid: a partial view's never counts;
+    # its shape failure waits for a view that saw the part whole and passes)
+    failing = [name for name in partial if not shape[name].passed] if witnesses else []
+    reading_shift = [name for name in partial if shape[name].band_shift is not None]
+    if not failing and not reading_shift:
         return None
-    # (their shape failures and layer-shift readings are set aside, which rest on where the outline lies; their readings
-    # of the part's rise and of loose material stay: a stop or spaghetti is read from the part's own outline)
+    # (their readings of the part's rise and of loose material stay: a stop or spaghetti is read from the part's own
+    # outline)
     kept = {name: replace(r, passed=True, decisive=False, band_shift=None, moved_px=None, reasons=[])
-            if name in partial else r for name, r in shape.items()}
+            if name in failing else replace(r, band_shift=None) if name in reading_shift else r
+            for name, r in shape.items()}
     again, again_reasons = decide(**{**decision, "shape": kept,
                                      "layer_shift": layer_shift_of(kept, history, placed_at=placed_at)})
     if again != "ok":
         return None
-    return "ok", [*again_reasons, f"{', '.join(partial)}: failing, but never saw the part whole (under "
-                                  f"{SEEN_WHOLE_SHARE:.0%} of it at any passing look) while {', '.join(witnesses)} "
-                                  f"did and pass{'es' if len(witnesses) == 1 else ''}"]
+    set_aside = sorted(set(failing) | set(reading_shift))
+    return "ok", [*again_reasons, f"{', '.join(set_aside)}: never saw the part whole (under {SEEN_WHOLE_SHARE:.0%} of "
+                                  f"it at any passing look): " + (f"failing while {', '.join(witnesses)} did and "
+                                  f"pass{'es' if len(witnesses) == 1 else ''}" if failing else "no layer-shift reading")]
