@@ -757,8 +757,9 @@ class CheckRunner:
 
     def decide_again(self, **overrides: Any) -> tuple[str, list[str]]:
         """(verdict, reasons) of the last check's evidence, :func:`decide`'s arguments changed by ``overrides`` (e.g.
-        ``size={}``: the shape check's verdict alone), a failure decided once more without the views that never saw
-        the part whole (:func:`without_views_never_seen_whole`: they laid their outline by the faces they saw)."""
+        ``size={}``: the shape check's verdict alone), a failure decided once more with the evidence of the views that
+        never saw the part whole set aside (:func:`without_views_never_seen_whole`: they laid their outline by the faces
+        they saw)."""
         decision = {**self.last_decision, **overrides}
         verdict, reasons = decide(**decision)
         if verdict != "fail":

@@ -904,10 +904,11 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
 
 
 #: A view that never saw more than this share of the part at a passing look (ShapeResult.outline_coverage: the
-#: expected part its material covered where the outline was laid) fails only with views that saw it whole
-#: (:func:`without_views_never_seen_whole`). Measured (helper al, cross-check seeds 30 and 31, 8d1777c): of 18
-#: anchors left by looks covering under 0.6 of the part, 7 lay over 8 px off it and 22 % of the later checks before
-#: an onset failed in that view; of 243 left by looks covering 0.8 or more, 6 and 0.5 %; none between 0.6 and 0.8.
+#: expected part its material covered where the outline was laid) reads no layer shift, and fails only with views that
+#: saw the part whole (:func:`without_views_never_seen_whole`). Measured (helper al, cross-check seeds 30 and 31,
+#: 8d1777c): of 18 anchors left by looks covering under 0.6 of the part, 7 lay over 8 px off it and 22 % of the later
+#: checks before an onset failed in that view; of 243 left by looks covering 0.8 or more, 6 and 0.5 %; none between 0.6
+#: and 0.8.
 SEEN_WHOLE_SHARE = 2.0 / 3.0
 
 
@@ -916,14 +917,16 @@ def without_views_never_seen_whole(decision: Mapping[str, Any],
                                    history: Sequence[tuple[bool, Mapping[str, BandShift]]] = (),
                                    placed_at: Mapping[str, Sequence[tuple[int, int]]] | None = None
                                    ) -> tuple[str, list[str]] | None:
-    """A failing check (``decision``: the arguments :func:`decide` failed it with) decided again without
-    the failing views that never saw the part whole, where a view that did passes: ``("ok", reasons)`` when the
-    rest pass, else None (the verdict stands).
+    """A failing check (``decision``: the arguments :func:`decide` failed it with) decided again with the evidence of
+    the views that never saw the part whole set aside: ``("ok", reasons)`` when the check then passes, else None (the
+    verdict stands).
 
     ``seen_share``: {camera: the most of the part its passing looks' material covered (0-1), None: no passing look}.
-    A failing view is set aside where that is under SEEN_WHOLE_SHARE and this is not its first look (that has no
-    history: the first check of a part that detached at once); a witness is a usable view, not relit, that passes
-    and saw the part whole. ``history``, ``placed_at``: :func:`layer_shift_of`'s, for the views kept.
+    A view never saw the part whole where that is under SEEN_WHOLE_SHARE and this is not its first look (that has no
+    history: the first check of a part that detached at once). Set aside: such a view's layer-shift reading always
+    (the newest band is read against the outline the view laid), and its shape failure where a witness passes: a usable
+    view, not relit, that saw the part whole. Its readings of the part's rise and of loose material stay. ``history``,
+    ``placed_at``: :func:`layer_shift_of`'s, for the readings kept.
 
     A view whose faces are the colour of the bed or the backdrop separates only some of them, and the overlap lays
     the outline where it takes those in: on the part's dark side or its cast shadow, 5-26 px off the part
