@@ -955,7 +955,10 @@ def without_views_never_seen_whole(decision: Mapping[str, Any],
                                      "layer_shift": layer_shift_of(kept, history, placed_at=placed_at)})
     if again != "ok":
         return None
-    set_aside = sorted(set(failing) | set(reading_shift))
-    return "ok", [*again_reasons, f"{', '.join(set_aside)}: never saw the part whole (under {SEEN_WHOLE_SHARE:.0%} of "
-                                  f"it at any passing look): " + (f"failing while {', '.join(witnesses)} did and "
-                                  f"pass{'es' if len(witnesses) == 1 else ''}" if failing else "no layer-shift reading")]
+    never = f"never saw the part whole (under {SEEN_WHOLE_SHARE:.0%} of it at any passing look)"
+    notes = [f"{', '.join(failing)}: {never}: failing while {', '.join(witnesses)} did and "
+             f"pass{'es' if len(witnesses) == 1 else ''}"] if failing else []
+    shift_only = [name for name in reading_shift if name not in failing]
+    if shift_only and decision.get("layer_shift") is not None:
+        notes.append(f"{', '.join(shift_only)}: {never}: no layer-shift reading")
+    return "ok", [*again_reasons, *notes]
