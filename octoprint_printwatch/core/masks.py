@@ -67,11 +67,9 @@ def within(mask: np.ndarray, radius: float) -> np.ndarray:
     pixel's shortest 3x3 path to its nearest mask pixel stays within the box around the two; the image's border is
     no source)."""
     out = np.zeros(mask.shape, bool)
-    box = bounding_box(mask, pad=int(np.ceil(radius / 0.955)) + 1)
-    if box is None:
-        return out
-    inner = (slice(box[0], box[1]), slice(box[2], box[3]))
-    out[inner] = cv2.distanceTransform((~mask[inner].astype(bool)).astype(np.uint8), cv2.DIST_L2, 3) <= radius
+    inner = _reachable_box(mask, radius)
+    if inner is not None:
+        out[inner] = _distances(mask[inner]) <= radius
     return out
 
 
@@ -81,12 +79,22 @@ def distance_up_to(mask: np.ndarray, reach: float) -> np.ndarray:
     and above ``reach`` (+inf beyond the box) everywhere else: every test of it against a distance up to ``reach``
     gives the whole image's answer."""
     out = np.full(mask.shape, np.inf, np.float32)
-    box = bounding_box(mask, pad=int(np.ceil(reach / 0.955)) + 1)
-    if box is None:
-        return out
-    inner = (slice(box[0], box[1]), slice(box[2], box[3]))
-    out[inner] = cv2.distanceTransform((~mask[inner].astype(bool)).astype(np.uint8), cv2.DIST_L2, 3)
+    inner = _reachable_box(mask, reach)
+    if inner is not None:
+        out[inner] = _distances(mask[inner])
     return out
+
+
+def _reachable_box(mask: np.ndarray, reach: float) -> tuple[slice, slice] | None:
+    """The box around ``mask`` within which the 3x3 distance to it can be up to ``reach`` (it grows by at least 0.955
+    px per px), as slices; None for an empty mask."""
+    box = bounding_box(mask, pad=int(np.ceil(reach / 0.955)) + 1)
+    return None if box is None else (slice(box[0], box[1]), slice(box[2], box[3]))
+
+
+def _distances(mask: np.ndarray) -> np.ndarray:
+    """(h, w) float32: each pixel's 3x3 distance to the nearest pixel of ``mask`` ((h, w) bool)."""
+    return cv2.distanceTransform((~mask.astype(bool)).astype(np.uint8), cv2.DIST_L2, 3)
 
 
 def erode(mask: np.ndarray, radius: float) -> np.ndarray:
@@ -194,10 +202,15 @@ APART_FROM_OUTLINE_PX = 3
 POINT_CONTACT_SHARE = 0.25
 
 
-def apart_from_outline(objects: np.ndarray, outline: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``objects`` ((h, w) bool) -> (the pixels farther than APART_FROM_OUTLINE_PX from ``outline``, those
-    nearer): the objects taken apart where only the part's rim or a fringe joins them."""
-    ring = cv2.dilate(outline.astype(np.uint8), disk(APART_FROM_OUTLINE_PX)).astype(bool) & objects
+def outline_ring(outline: np.ndarray) -> np.ndarray:
+    """(h, w) bool: within APART_FROM_OUTLINE_PX of ``outline`` ((h, w) bool, the part's outline zone)."""
+    return cv2.dilate(outline.astype(np.uint8), disk(APART_FROM_OUTLINE_PX)).astype(bool)
+
+
+def apart_from_ring(objects: np.ndarray, ring_zone: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``objects`` ((h, w) bool) -> (the pixels outside ``ring_zone`` (:func:`outline_ring`), those inside): the
+    objects taken apart where only the part's rim or a fringe joins them."""
+    ring = ring_zone & objects
     return objects & ~ring, ring
 
 
@@ -220,13 +233,13 @@ def reaching_in_from_above(objects: np.ndarray, search: np.ndarray, expected: np
     (its shadow or mirror image on glass) are no foot, while a piece of the part knocked over leans on the
     outline (and its first reading, with the weak pixels, already kept it as the print's).
     ``outline`` ((h, w) bool, the part's outline zone) or None: a blob kept only for reaching the foot is
-    looked at again taken apart from a ring around the outline (apart_from_outline): a piece of it that reaches
+    looked at again taken apart from a ring around the outline (apart_from_ring): a piece of it that reaches
     in from above on its own and meets the outline at a point (POINT_CONTACT_SHARE) hangs beside the part in
     this view, joined to its foot by nothing but the part's rim.
     """
     out, kept_at_foot = _reaching_in(objects, search, expected, material, before)
     if outline is not None and kept_at_foot.any():
-        apart, ring = apart_from_outline(kept_at_foot, outline)
+        apart, ring = apart_from_ring(kept_at_foot, outline_ring(outline))
         pieces, _ = _reaching_in(apart, search, expected, material, before)
         out |= _touching_at_a_point(pieces, ring)
     return out
@@ -369,18 +382,17 @@ class _OutlineZones:
     :func:`crossing_the_box`'s groupings (the same outline) and only when a grouping gets that far."""
 
     def __init__(self, outline: np.ndarray):
-        self.outline_u8 = outline.astype(np.uint8)
+        self.outline = outline
 
     @cached_property
     def ring(self) -> np.ndarray:
-        """(h, w) bool: within APART_FROM_OUTLINE_PX of the outline zone (apart_from_outline's ring, before it
-        is cut to the objects)."""
-        return cv2.dilate(self.outline_u8, disk(APART_FROM_OUTLINE_PX)).astype(bool)
+        """(h, w) bool: :func:`outline_ring` of the outline zone."""
+        return outline_ring(self.outline)
 
     @cached_property
     def at_part(self) -> np.ndarray:
         """(h, w) bool: within 5 px of the outline zone (a rod's end there runs on behind the part)."""
-        return cv2.dilate(self.outline_u8, disk(5)).astype(bool)
+        return cv2.dilate(self.outline.astype(np.uint8), disk(5)).astype(bool)
 
 
 def labelled_on_its_box(mask: np.ndarray) -> tuple[int, np.ndarray, tuple[slice, slice]]:
@@ -415,9 +427,7 @@ def _fill_extents(stats: np.ndarray, labels: np.ndarray, indices: np.ndarray, in
 def _rods_among(objects: np.ndarray, search: np.ndarray, zones: _OutlineZones, part_in_place: bool) -> np.ndarray:
     """:func:`crossing_the_box` for one grouping of the pixels into blobs (``objects``)."""
     out = np.zeros(objects.shape, bool)
-    # (apart_from_outline with the ring made once)
-    ring = zones.ring & objects
-    apart = objects & ~ring
+    apart, ring = apart_from_ring(objects, zones.ring)
     count, labels, inner = labelled_on_its_box(apart)
     if count <= 1:
         return out
