@@ -925,8 +925,9 @@ def without_views_never_seen_whole(decision: Mapping[str, Any],
     A view never saw the part whole where that is under SEEN_WHOLE_SHARE and this is not its first look (that has no
     history: the first check of a part that detached at once). Set aside: such a view's layer-shift reading always
     (the newest band is read against the outline the view laid), and its shape failure where a witness passes: a usable
-    view, not relit, that saw the part whole. Its readings of the part's rise and of loose material stay. ``history``,
-    ``placed_at``: :func:`layer_shift_of`'s, for the readings kept.
+    view, not relit, that saw the part whole. What a stop or spaghetti is read from stays: its readings of the part's
+    rise, of its band's top lowered (a stop's witness), of missing and loose material. ``history``, ``placed_at``:
+    :func:`layer_shift_of`'s, for the readings kept.
 
     A view whose faces are the colour of the bed or the backdrop separates only some of them, and the overlap lays
     the outline where it takes those in: on the part's dark side or its cast shadow, 5-26 px off the part
@@ -943,16 +944,17 @@ def without_views_never_seen_whole(decision: Mapping[str, Any],
     # (a layer-shift reading is the newest band against the outline the view laid: a partial view's never counts;
     # its shape failure waits for a view that saw the part whole and passes)
     failing = [name for name in partial if not shape[name].passed] if witnesses else []
-    reading_shift = [name for name in partial if shape[name].band_shift is not None]
+    shifts = band_shifts_of(shape)
+    reading_shift = [name for name in partial if name in shifts]
     if not failing and not reading_shift:
         return None
-    # (their readings of the part's rise and of loose material stay: a stop or spaghetti is read from the part's own
-    # outline)
-    kept = {name: replace(r, passed=True, decisive=False, band_shift=None, moved_px=None, reasons=[])
-            if name in failing else replace(r, band_shift=None) if name in reading_shift else r
+    # (what a stop or spaghetti is read from stays: the view's rise, its band's top lowered, its missing and loose
+    # material; a part a view sees partly still stops)
+    kept = {name: replace(r, passed=True, decisive=False, moved_px=None, reasons=[]) if name in failing else r
             for name, r in shape.items()}
-    again, again_reasons = decide(**{**decision, "shape": kept,
-                                     "layer_shift": layer_shift_of(kept, history, placed_at=placed_at)})
+    layer_shift = layer_shift_of(kept, history, {name: s for name, s in shifts.items() if name not in partial},
+                                 placed_at=placed_at)
+    again, again_reasons = decide(**{**decision, "shape": kept, "layer_shift": layer_shift})
     if again != "ok":
         return None
     never = f"never saw the part whole (under {SEEN_WHOLE_SHARE:.0%} of it at any passing look)"
