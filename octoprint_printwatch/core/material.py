@@ -57,6 +57,9 @@ class Evidence:
     frame_gradient: np.ndarray | None = None   # (h, w) float32, the frame's luma gradient (:func:`_gradient`)
     new_edges: np.ndarray | None = None   # (h, w) float32, edges the background has not, in units of their bed noise
     relit: bool = False   # read against a background relit by the bed's smooth change of light (bed_light_change)
+    #: (h, w) bool: the bed read brightened only because a shadow in the background frame has moved away
+    #: (shadows.shadow_left); None where nothing brightened
+    shadow_left: np.ndarray | None = None
 
 
 def _luma_chroma(image: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -172,6 +175,7 @@ def material_evidence(
     part: np.ndarray | None = None,
     palette: np.ndarray | None = None,
     relight_above: float | None = None,
+    left_before: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> Evidence:
     """Background removal on one crop.
 
@@ -195,6 +199,8 @@ def material_evidence(
         across a glossy bed, a lamp that moved): the bed's smooth change of light (:func:`bed_light_change`)
         is added to the background and the evidence read again, kept (``relit``) where the bed then matches
         (RELIT_MAX_CHANGED); None: never.
+    left_before : (the previous check's frame (h, w, 3) uint8, the bed it read as a shadow that left (h, w) bool), the
+        same crop, or None: that bed, unchanged in the frame since, is still such bed (see unchanged_since).
     """
     sample_mask = bed_sample if int(np.count_nonzero(bed_sample)) >= 50 else ~prior
     sample = np.flatnonzero(sample_mask)
@@ -211,7 +217,10 @@ def material_evidence(
         if np.count_nonzero(ok) >= 50:
             gains = np.median(fr_s[ok] / bg_s[ok], axis=0).astype(np.float32)
             gains = np.clip(gains, 0.2, 5.0)
-    args = (background, frame, prior, sample, material_factor, bed_factor, previous, part, palette, gains)
+    kept = None
+    if left_before is not None and left_before[1].any():
+        kept = left_before[1] & unchanged_since(left_before[0], frame, sample, material_factor)
+    args = (background, frame, prior, sample, material_factor, bed_factor, previous, part, palette, gains, kept)
     bg = _scaled(background, gains)
     evidence = _evidence_against(bg, *args)
     if relight_above is None or evidence.changed_bed_fraction <= relight_above:
@@ -228,7 +237,8 @@ def material_evidence(
 
 def _evidence_against(bg: np.ndarray, background: np.ndarray, frame: np.ndarray, prior: np.ndarray,
                       sample: np.ndarray, material_factor: float, bed_factor: float, previous: np.ndarray | None,
-                      part: np.ndarray | None, palette: np.ndarray | None, gains: np.ndarray) -> Evidence:
+                      part: np.ndarray | None, palette: np.ndarray | None, gains: np.ndarray,
+                      kept: np.ndarray | None = None) -> Evidence:
     """material_evidence's cues read against ``bg``, the background as the frame's light should show it
     ((h, w, 3) float32); ``sample``: the flat indices of the certain-bed pixels it reads the noise on."""
     fr = np.ascontiguousarray(frame)
@@ -289,11 +299,10 @@ def _evidence_against(bg: np.ndarray, background: np.ndarray, frame: np.ndarray,
         seen = previous & prior
         if int(np.count_nonzero(seen)) >= 50 and float(np.median(z["chroma"][seen])) > material_factor:
             grain_needed = np.zeros_like(prior)
-    bright_strong = _zero_where(z["bright"], shadow_left(luma_f, luma_b, sample, noise["bright"], material_factor,
-                                                         where=(z["bright"] > material_factor)
-                                                         & (chroma_strong <= material_factor),
-                                                         min_ratio=SHADOW_MIN_RATIO, prior=grain_needed,
-                                                         surroundings=prior))
+    left = shadow_left(luma_f, luma_b, sample, noise["bright"], material_factor,
+                       where=(z["bright"] > material_factor) & (chroma_strong <= material_factor),
+                       min_ratio=SHADOW_MIN_RATIO, prior=grain_needed, surroundings=prior, kept=kept)
+    bright_strong = _zero_where(z["bright"], left)
     strong = np.maximum(chroma_strong, bright_strong)
     # (a shadow that left, where the bed's grain shows through, is the bed even inside the prior: a part
     # there would hide the grain; counting it kept a stalled part's missing top "seen" under the head's
@@ -313,7 +322,7 @@ def _evidence_against(bg: np.ndarray, background: np.ndarray, frame: np.ndarray,
     changed = float(np.mean(changed_px)) if sample.size else 0.0
     return Evidence(material=material, strong=strong_material, bed=bed, score=score, noise=noise, gains=gains,
                     background_norm=bg, frame_gradient=grad_f, new_edges=z["texture"],
-                    changed_bed_fraction=changed)
+                    changed_bed_fraction=changed, shadow_left=left if left.any() else None)
 
 
 #: A pixel took the part's colour where its chromaticity moved from the bed's to within this share of the
@@ -351,6 +360,23 @@ def _gradient(luma: np.ndarray) -> np.ndarray:
     out = cv2.blur(gx, (3, 3))
     out *= 0.25
     return out
+
+
+def unchanged_since(before: np.ndarray, frame: np.ndarray, sample: np.ndarray, factor: float) -> np.ndarray:
+    """(h, w) bool: the pixels of ``frame`` that look as they did in ``before`` (both (h, w, 3) uint8, the same crop of
+    one camera's frames at two checks): their lumas (3x3 means, ``before`` brought to this frame's exposure by the
+    median ratio on the certain bed, ``sample`` flat indices) differ by at most ``factor`` times the bed's own such
+    difference (its 90th percentile, at least one grey level)."""
+    if sample.size < 50:
+        return np.zeros(frame.shape[:2], bool)
+    luma_now = cv2.blur(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY).astype(np.float32), (3, 3))
+    luma_then = cv2.blur(cv2.cvtColor(before, cv2.COLOR_BGR2GRAY).astype(np.float32), (3, 3))
+    now_s, then_s = luma_now.ravel()[sample], luma_then.ravel()[sample]
+    ok = then_s > 8.0
+    gain = float(np.median(now_s[ok] / then_s[ok])) if np.count_nonzero(ok) >= 50 else 1.0
+    difference = np.abs(luma_now - gain * luma_then)
+    noise = max(float(np.percentile(difference.ravel()[sample], 90)), 1.0)
+    return difference <= factor * noise
 
 
 def _zero_where(value: np.ndarray, mask: np.ndarray) -> np.ndarray:

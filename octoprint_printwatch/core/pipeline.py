@@ -472,6 +472,9 @@ class CameraState:
     last_observed_z: float | None = None
     #: (dx, dy) px: where that check laid the outline (the new-material test measures beyond it too)
     last_observed_shift: tuple[int, int] | None = None
+    #: its frame at its last usable check and the bed it read there as a shadow that left (shadows.shadow_left), or
+    #: None: the next check keeps that bed where the frame did not change
+    left_before: tuple[np.ndarray, np.ndarray] | None = None
     #: (z, observed mask) of its usable checks before the last one, newest first (at most
     #: GROWTH_SPAN_CHECKS - 1): the growth test's older looks, where one check's rise is too small to read
     older_observed: list = field(default_factory=list)
@@ -662,6 +665,7 @@ class CheckRunner:
                              if self.previous_z is not None and zz < self.previous_z],
                 placed_at=tuple(state.placed_at),
                 shift_before=state.last_observed_shift,
+                left_before=state.left_before,
             )
             result = check_shape(**shape_args, candidates=state.shift_candidates, track_candidates=True)
             result = not_decisive_where_it_stood(result, shape_args)
@@ -671,6 +675,8 @@ class CheckRunner:
                     and _px_apart(result.outline_best_candidate, result.shift_px) > OUTLINE_DISAGREES_PX:
                 state.first_look_outline = result.outline_best_candidate
             errors[name] = shape[name].error_pct if result.usable else None
+            state.left_before = ((frame, result.shadow_left_mask)
+                                 if result.usable and result.shadow_left_mask is not None else None)
             if result.usable:
                 state.saw(result.observed_mask, z, shape[name].shift_px)
                 state.last_growth = result.growth_pct

@@ -164,6 +164,9 @@ class ShapeResult:
     #: the background was relit by the bed's smooth change of light before the part was read (Evidence.relit:
     #: a reflection swept across a glossy bed, or a lamp moved)
     relit: bool = False
+    #: (h, w) bool, full frame: the bed read brightened only because a shadow in the background frame moved away
+    #: (shadows.shadow_left); None where there was none. The next check keeps it where the frame did not change
+    shadow_left_mask: np.ndarray | None = field(default=None, repr=False)
     # pieces the overlay is drawn from (kept so the picture costs nothing unless asked for)
     _frame: np.ndarray | None = field(default=None, repr=False)
     _expected: np.ndarray | None = field(default=None, repr=False)
@@ -644,6 +647,7 @@ def check_shape(
     older_looks: Sequence[tuple[np.ndarray, np.ndarray]] = (),
     placed_at: Sequence[tuple[int, int]] = (),
     shift_before: tuple[int, int] | None = None,
+    left_before: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> ShapeResult:
     """Shape check of one camera (module docstring). Images (h, w, 3) uint8 BGR of the camera's size.
 
@@ -666,6 +670,8 @@ def check_shape(
     covers them all).
     ``shift_before``: the shift (dx, dy) this camera laid the outline at, at its previous usable check (the one
     ``last_observed`` was seen at), or None.
+    ``left_before``: (this camera's previous check's frame (h, w, 3) uint8, the bed it read there as a shadow that
+    left, :attr:`ShapeResult.shadow_left_mask`), or None (material_evidence).
     """
     h, w = regions.silhouette.shape
     if frame.shape[:2] != (h, w):
@@ -702,9 +708,13 @@ def check_shape(
     bed_sample = (distance > shift_bound + 2 * tol + 4) & ~dont_care
     previous = cropped(previous_mask, (h, w), crop)
 
+    left_then = None
+    if left_before is not None and left_before[0].shape[:2] == (h, w) and left_before[1].shape == (h, w):
+        left_then = (left_before[0][crop], left_before[1][crop])
     evidence = material_evidence(background[crop], frame[crop], prior, bed_sample,
                                  material_factor=material_factor, bed_factor=bed_factor, previous=previous,
-                                 part=distance <= tol, palette=palette, relight_above=max_changed_bed_fraction)
+                                 part=distance <= tol, palette=palette, relight_above=max_changed_bed_fraction,
+                                 left_before=left_then)
     cleaned = clean_mask(evidence.material)
     holes = enclosed(cleaned) & (distance <= shift_bound) if cleaned.any() else np.zeros_like(cleaned)
     observed = cleaned | holes
@@ -925,6 +935,7 @@ def check_shape(
         background_missing_pct=background_missing_pct, background_band_missing_pct=background_band_missing_pct,
         band_part_coverage=band_coverage, coarse_growth_pct=rise.coarse_growth_pct, foreign_mask=foreign_full,
         growth_span=rise.span, span_growth_pct=rise.span_growth_pct, band_texture=band_texture,
+        shadow_left_mask=None if evidence.shadow_left is None else _paste(observed_full, crop, evidence.shadow_left),
     )
     if keep_pictures:
         full = np.zeros((h, w), bool)
