@@ -364,18 +364,20 @@ def _gradient(luma: np.ndarray) -> np.ndarray:
 
 def unchanged_since(before: np.ndarray, frame: np.ndarray, sample: np.ndarray, factor: float) -> np.ndarray:
     """(h, w) bool: the pixels of ``frame`` that look as they did in ``before`` (both (h, w, 3) uint8, the same crop of
-    one camera's frames at two checks): their lumas (3x3 means, ``before`` brought to this frame's exposure by the
-    median ratio on the certain bed, ``sample`` flat indices) differ by at most ``factor`` times the bed's own such
-    difference (its 90th percentile, at least one grey level)."""
+    one camera's frames at two checks): in no channel (3x3 means, ``before`` brought to this frame's exposure by
+    per-channel median ratios on the certain bed, ``sample`` flat indices) do they differ by more than ``factor``
+    times the bed's own such difference (its 90th percentile, at least one grey level)."""
     if sample.size < 50:
         return np.zeros(frame.shape[:2], bool)
-    luma_now = cv2.blur(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY).astype(np.float32), (3, 3))
-    luma_then = cv2.blur(cv2.cvtColor(before, cv2.COLOR_BGR2GRAY).astype(np.float32), (3, 3))
-    now_s, then_s = luma_now.ravel()[sample], luma_then.ravel()[sample]
-    ok = then_s > 8.0
-    gain = float(np.median(now_s[ok] / then_s[ok])) if np.count_nonzero(ok) >= 50 else 1.0
-    difference = np.abs(luma_now - gain * luma_then)
-    noise = max(float(np.percentile(difference.ravel()[sample], 90)), 1.0)
+    now = cv2.blur(frame, (3, 3)).astype(np.float32)
+    then = cv2.blur(before, (3, 3)).astype(np.float32)
+    rows, cols = np.divmod(sample, frame.shape[1])
+    now_s, then_s = now[rows, cols], then[rows, cols]
+    ok = then_s.min(axis=1) > 8.0
+    gains = (np.median(now_s[ok] / then_s[ok], axis=0) if np.count_nonzero(ok) >= 50
+             else np.ones(3, np.float32)).astype(np.float32)
+    difference = np.abs(now - then * gains).max(axis=2)
+    noise = max(float(np.percentile(difference[rows, cols], 90)), 1.0)
     return difference <= factor * noise
 
 
