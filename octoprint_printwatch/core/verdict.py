@@ -519,8 +519,9 @@ def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings,
         cam for cam in measured if held_a_rise(held_rise_before, cam)}
     # Where fewer views are usable than a stop with nothing missing needs (a one-camera rig: stopped_views_needed),
     # no second view outvotes one reading's pixel step, so the stopped view shows the stop itself (stop_witnessed: a
-    # trace missing, or its band's top read lowered), as views_read_a_stop asks below (seed 30 ``007_normal``: one
-    # camera, 0 % after readings of 100 %, nothing missing, then 200 %: the top read one check late)
+    # trace missing, or its band's top read lowered), as views_read_a_stop asks below (seed 30 ``007_normal`` and seed
+    # 34 ``003_normal``: one camera, 0 % after readings of 100 %, nothing missing, then 200 %: the top read one check
+    # late)
     if len(usable) < STOPPED_VIEWS:
         rose_before = {cam for cam in rose_before if stop_witnessed(usable[cam], usable)}
     stalled, bare_band = stall_rules({cam: r.growth_pct for cam, r in measured.items()}, rose_before)

@@ -7,7 +7,8 @@ What a user would notice: a normal print on a one-camera printer paused as "the 
 the previous check: 0% of the expected rise seen (median of 1 camera(s))" while nothing of the part was missing.
 Cross-check seed 30 ``007_normal`` (an orange ring on gold PEI, one camera): s0 read the rise at 100 % for nine checks,
 0 % at check 10 with 0.0 % of the part and of its newest band missing, then 200 % at check 11: its top read one check
-late. A second view would have outvoted it; with one camera, only missing layers tell a stop from that pixel step.
+late; seed 34 ``003_normal`` (a translucent blue stack on kapton, one camera) the same at its check 11. A second view
+would have outvoted it; with one camera, only missing layers tell a stop from that pixel step.
 A stop with a trace missing, and two views reading it, stall as before."""
 from __future__ import annotations
 
