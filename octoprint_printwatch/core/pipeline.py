@@ -458,6 +458,9 @@ class CameraState:
     #: (ShapeResult.outline_coverage; None: no passing look yet): a view that never saw more than part of the part
     #: placed the outline by the faces it saw (verdict.without_views_never_seen_whole)
     seen_share: float | None = None
+    #: the share of the expected part the material covered at the passing look that laid the anchor where it is
+    #: (ShapeResult.outline_coverage; None: no anchor yet): the outline stays where that look put it
+    anchor_share: float | None = None
     #: (k, 2) shifts no passing check so far could tell apart (each narrows them; _second_look)
     shift_candidates: np.ndarray | None = None
     #: the (dx, dy) px its passing checks aligned the outline at (each once; its reflection zone covers them)
@@ -544,6 +547,8 @@ class CameraState:
             anchor = agreeing_anchor(result.shift_px, result.shift_candidates, max_drift)
             if follows_the_shifted_top(self.anchor, anchor, result):
                 return
+            if anchor != self.anchor or self.anchor_share is None:
+                self.anchor_share = result.outline_coverage
             self.anchor = anchor
             self.frozen = tall
 
@@ -772,7 +777,8 @@ class CheckRunner:
             return verdict, reasons
         return without_views_never_seen_whole(
             decision, {name: state.seen_share for name, state in self.cameras.items()},
-            *self.last_layer_shift_inputs) or (verdict, reasons)
+            *self.last_layer_shift_inputs,
+            anchor_share={name: state.anchor_share for name, state in self.cameras.items()}) or (verdict, reasons)
 
     def _second_look(self, name: str, result: ShapeResult, shape_args: dict,
                      missing: bool = False, growth_before: float | None = None) -> ShapeResult | None:
@@ -901,6 +907,7 @@ class CheckRunner:
         result at this check (updates ``shape`` and ``errors``)."""
         state = self.cameras[name]
         state.calibration_offset = state.anchor = probe.shift_px
+        state.anchor_share = probe.outline_coverage
         state.placed_at = [probe.shift_px]   # (the earlier places lay within the old reach: not where the part is)
         # held there: the alignment's prior, centred on the stated calibration, would walk it back
         state.frozen = True

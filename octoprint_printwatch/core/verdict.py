@@ -652,9 +652,13 @@ def stop_witnessed(result: ShapeResult, usable: Mapping[str, ShapeResult]) -> bo
                 and not a_view_reads_the_full_rise(usable)))
 
 
+#: decide's ``layer_shift`` when the caller read none: read it from the views (an explicit None is "no shift read")
+READ_FROM_THE_VIEWS: Any = object()
+
+
 def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings: DetectionSettings,
            unreadable: Mapping[str, str] | Sequence[str] = (), *,
-           layer_shift: LayerShift | None = None, top_closing: bool = False,
+           layer_shift: LayerShift | None = READ_FROM_THE_VIEWS, top_closing: bool = False,
            pairs: Sequence[Sequence[str]] = (),
            extra_before: Mapping[str, float] | None = None,
            band_coverage_before: Mapping[str, float] | None = None,
@@ -753,7 +757,9 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       exists);
     * unknown when no camera and no pair gave usable evidence; ok otherwise.
     """
-    if layer_shift is None:
+    if layer_shift is READ_FROM_THE_VIEWS:
+        # (only where the caller gave none: a re-decision that set some views' readings aside may have read none, and
+        # reading them again here would bring those back)
         layer_shift = layer_shift_of(shape)
     if not isinstance(unreadable, Mapping):
         unreadable = {cam: "no frame (camera unavailable)" for cam in unreadable}
@@ -922,7 +928,8 @@ SEEN_WHOLE_SHARE = 2.0 / 3.0
 def without_views_never_seen_whole(decision: Mapping[str, Any],
                                    seen_share: Mapping[str, float | None],
                                    history: Sequence[tuple[bool, Mapping[str, BandShift]]] = (),
-                                   placed_at: Mapping[str, Sequence[tuple[int, int]]] | None = None
+                                   placed_at: Mapping[str, Sequence[tuple[int, int]]] | None = None,
+                                   anchor_share: Mapping[str, float | None] | None = None
                                    ) -> tuple[str, list[str]] | None:
     """A failing check (``decision``: the arguments :func:`decide` failed it with) decided again with the evidence of
     the views that never saw the part whole set aside: ``("ok", reasons)`` when the check then passes, else None (the
@@ -936,6 +943,11 @@ def without_views_never_seen_whole(decision: Mapping[str, Any],
     rise, of its band's top lowered (a stop's witness), of missing and loose material. ``history``, ``placed_at``:
     :func:`layer_shift_of`'s, for the readings kept.
 
+    ``anchor_share``: {camera: the share of the part the passing look that laid its anchor covered, None: no anchor}.
+    A view whose anchor a look covering under SEEN_WHOLE_SHARE laid reads no layer shift either, however much of the
+    part its later looks saw: a held anchor moves a pixel at a time, so the outline stays where that look put it, and
+    the newest band is read against that outline (al's measurement below is of exactly those anchors).
+
     A view whose faces are the colour of the bed or the backdrop separates only some of them, and the overlap lays
     the outline where it takes those in: on the part's dark side or its cast shadow, 5-26 px off the part
     (cross-check seeds 30-33, ``benchmarks/outline_residual.py``). Held there, the view reads the part beside its
@@ -946,20 +958,27 @@ def without_views_never_seen_whole(decision: Mapping[str, Any],
     def saw_whole(name: str) -> bool:
         return (seen_share.get(name) or 0.0) >= SEEN_WHOLE_SHARE
 
+    def anchored_by_a_partial_look(name: str) -> bool:
+        share = (anchor_share or {}).get(name)
+        return share is not None and share < SEEN_WHOLE_SHARE
+
     partial = [name for name, r in shape.items() if r.usable and not r.first_look and not saw_whole(name)]
     witnesses = [name for name, r in shape.items() if r.usable and r.passed and not r.relit and saw_whole(name)]
-    # (a layer-shift reading is the newest band against the outline the view laid: a partial view's never counts;
-    # its shape failure waits for a view that saw the part whole and passes)
+    # (a layer-shift reading is the newest band against the outline the view laid: a partial view's never counts, nor
+    # that of a view whose outline a partial look anchored; a partial view's shape failure waits for a view that saw
+    # the part whole and passes)
     failing = [name for name in partial if not shape[name].passed] if witnesses else []
     shifts = band_shifts_of(shape)
-    reading_shift = [name for name in partial if name in shifts]
+    partly_anchored = [name for name, r in shape.items()
+                       if r.usable and not r.first_look and name not in partial and anchored_by_a_partial_look(name)]
+    reading_shift = [name for name in [*partial, *partly_anchored] if name in shifts]
     if not failing and not reading_shift:
         return None
     # (what a stop or spaghetti is read from stays: the view's rise, its band's top lowered, its missing and loose
     # material; a part a view sees partly still stops)
     kept = {name: replace(r, passed=True, decisive=False, moved_px=None, reasons=[]) if name in failing else r
             for name, r in shape.items()}
-    layer_shift = layer_shift_of(kept, history, {name: s for name, s in shifts.items() if name not in partial},
+    layer_shift = layer_shift_of(kept, history, {name: s for name, s in shifts.items() if name not in reading_shift},
                                  placed_at=placed_at)
     again, again_reasons = decide(**{**decision, "shape": kept, "layer_shift": layer_shift})
     if again != "ok":
@@ -967,7 +986,11 @@ def without_views_never_seen_whole(decision: Mapping[str, Any],
     never = f"never saw the part whole (under {SEEN_WHOLE_SHARE:.0%} of it at any passing look)"
     notes = [f"{', '.join(failing)}: {never}: failing while {', '.join(witnesses)} did and "
              f"pass{'es' if len(witnesses) == 1 else ''}"] if failing else []
-    shift_only = [name for name in reading_shift if name not in failing]
+    shift_only = [name for name in reading_shift if name not in failing and name in partial]
     if shift_only and decision.get("layer_shift") is not None:
         notes.append(f"{', '.join(shift_only)}: {never}: no layer-shift reading")
+    anchored_only = [name for name in reading_shift if name in partly_anchored]
+    if anchored_only and decision.get("layer_shift") is not None:
+        notes.append(f"{', '.join(anchored_only)}: its outline was anchored by a look that saw under "
+                     f"{SEEN_WHOLE_SHARE:.0%} of the part: no layer-shift reading")
     return "ok", [*again_reasons, *notes]
