@@ -107,3 +107,23 @@ def test_a_layer_shift_read_only_by_a_view_that_never_saw_the_part_whole_does_no
     checks = {c["layer"]: c for c in evaluate_recording(load_recording(folder))["checks"]}
     assert checks[55]["verdict"] == "ok"
     assert any("s1: never saw the part whole" in r and "no layer-shift reading" in r for r in checks[55]["reasons"])
+
+
+def test_a_layer_shift_read_only_by_a_view_a_partial_look_anchored_does_not_pause_the_print():
+    """Seed 33 ``002_normal`` cut to s0 at layers 25-200 (tests/data/SOURCES.md): an L in the bed's colour on kapton.
+    s0's first look separates 38 % of the part and lays the outline 7 px beside it, where the anchor then holds it; its
+    later looks see up to 79 % of the part, so the view "saw it whole", but the outline stays where the first look put
+    it. At layer 150 it reads the newest layers "3.6 mm sideways" on the older ones, alone: the offset of its outline,
+    not of the layers (b612c46 pauses this normal print there). A layer-shift reading is the newest band against the
+    view's own outline, so a view whose anchor a partial look laid gives none. The view is the only one reading a
+    shift: the check decided again without it reads none, and must not read it back from every view."""
+    from pathlib import Path
+
+    from octoprint_printwatch.core.pipeline import evaluate_recording
+    from octoprint_printwatch.core.recording import load_recording
+
+    folder = Path(__file__).resolve().parent.parent / "data" / "recordings" / "L_like_bed_kapton_partly_anchored"
+    checks = {c["layer"]: c for c in evaluate_recording(load_recording(folder))["checks"]}
+    assert [c["verdict"] for c in checks.values()] == ["ok"] * 8
+    assert any("s0: its outline was anchored by a look that saw under" in r and "no layer-shift reading" in r
+               for r in checks[150]["reasons"])
