@@ -998,7 +998,9 @@ def without_views_never_seen_whole(decision: Mapping[str, Any],
     if shift_only and decision.get("layer_shift") is not None:
         notes.append(f"{', '.join(shift_only)}: {never}: no layer-shift reading")
     anchored_only = [name for name in reading_shift if name in partly_anchored]
-    if anchored_only and decision.get("layer_shift") is not None:
+    # (said only where their reading failed the check: the shift shows to them alone, so it was theirs)
+    if anchored_only and decision.get("layer_shift") is not None \
+            and confirms_layer_shift(decision["layer_shift"], decision["settings"].layer_shift_mm):
         notes.append(f"{', '.join(anchored_only)}: its outline was anchored by a look that saw under "
                      f"{SEEN_WHOLE_SHARE:.0%} of the part: no layer-shift reading")
     return "ok", [*again_reasons, *notes]
