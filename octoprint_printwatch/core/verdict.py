@@ -947,9 +947,9 @@ def without_views_never_seen_whole(decision: Mapping[str, Any],
     A view whose anchor a look covering under SEEN_WHOLE_SHARE laid reads no layer shift either, however much of the
     part its later looks saw, where the shift shows to no camera but such views: a held anchor moves a pixel at a
     time, so the outline stays where that look put it, and the newest band is read against that outline
-    (SEEN_WHOLE_SHARE's measurement, al's, is of exactly those anchors). A camera whose outline a whole look laid, agreeing on the same
-    bed move, reads it against an outline of its own (cross-check seed 30 `031_layer_shift`: s0, s1 and s3 confirm
-    2.2 mm together at check 4, s3 anchored by a look covering 0.48 at check 0 and 0.95-0.99 later).
+    (SEEN_WHOLE_SHARE's measurement, al's, is of exactly those anchors). A camera whose outline a whole look laid,
+    agreeing on the same bed move, reads it against an outline of its own (cross-check seed 30 `031_layer_shift`: s0,
+    s1 and s3 confirm 2.2 mm together at check 4, s3 anchored by a look covering 0.48 at check 0 and 0.95-0.99 later).
 
     A view whose faces are the colour of the bed or the backdrop separates only some of them, and the overlap lays
     the outline where it takes those in: on the part's dark side or its cast shadow, 5-26 px off the part
