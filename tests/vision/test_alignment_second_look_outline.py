@@ -14,9 +14,10 @@ from pathlib import Path
 
 import cv2
 
-from octoprint_printwatch.core.pipeline import CheckRunner, evaluate_recording, prepare_job
+from octoprint_printwatch.core.pipeline import evaluate_recording
 from octoprint_printwatch.core.recording import load_recording
-from octoprint_printwatch.core.settings import DetectionSettings
+
+from .check_runs import run_checks
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "recordings"
 BLOCK = DATA / "stack_brim_calib_offset_single"
@@ -27,20 +28,12 @@ SLID_FIRST_LOOK = (6, -9)
 def replay_with_slid_first_look(folder: Path) -> list:
     """The recording's check results, the camera's first look anchored at SLID_FIRST_LOOK (its outline match,
     which disagrees with it, remembered as check_shape's own first look would have it)."""
-    recording = load_recording(folder)
-    settings = DetectionSettings()
-    checks = sorted(recording.checks, key=lambda c: (c.z, c.layer))
-    plan = prepare_job(gcode_path=recording.gcode, model_path=recording.model, cameras=recording.cameras,
-                       pairs=recording.pairs, check_heights=[(c.layer, c.z) for c in checks], settings=settings)
-    runner = CheckRunner(plan, settings, {name: recording.read_background(name) for name in recording.cameras})
-    results = []
-    for check in checks:
-        results.append(runner.run_check(check.layer, check.z,
-                                        {name: recording.read_frame(check, name) for name in recording.cameras}))
+    def slide_first_look(runner, results: list) -> None:
         if len(results) == 1:
             state, first = runner.cameras["s1"], results[0].shape["s1"]
             state.anchor, state.first_look_outline = SLID_FIRST_LOOK, first.outline_best_candidate
-    return results
+
+    return run_checks(folder, slide_first_look)
 
 
 def test_the_block_passes_every_check():
