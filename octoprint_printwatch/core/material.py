@@ -14,6 +14,7 @@ then tell its material from a shadow or a change of light (:func:`coverage_by_pa
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import cv2
 import numpy as np
@@ -217,9 +218,7 @@ def material_evidence(
         if np.count_nonzero(ok) >= 50:
             gains = np.median(fr_s[ok] / bg_s[ok], axis=0).astype(np.float32)
             gains = np.clip(gains, 0.2, 5.0)
-    kept = None
-    if left_before is not None and left_before[1].any():
-        kept = left_before[1] & unchanged_since(left_before[0], frame, sample, material_factor)
+    kept = _left_and_unchanged(left_before, frame, sample, material_factor)
     args = (background, frame, prior, sample, material_factor, bed_factor, previous, part, palette, gains, kept)
     bg = _scaled(background, gains)
     evidence = _evidence_against(bg, *args)
@@ -238,7 +237,7 @@ def material_evidence(
 def _evidence_against(bg: np.ndarray, background: np.ndarray, frame: np.ndarray, prior: np.ndarray,
                       sample: np.ndarray, material_factor: float, bed_factor: float, previous: np.ndarray | None,
                       part: np.ndarray | None, palette: np.ndarray | None, gains: np.ndarray,
-                      kept: np.ndarray | None = None) -> Evidence:
+                      kept: Callable[[], np.ndarray] | None = None) -> Evidence:
     """material_evidence's cues read against ``bg``, the background as the frame's light should show it
     ((h, w, 3) float32); ``sample``: the flat indices of the certain-bed pixels it reads the noise on."""
     fr = np.ascontiguousarray(frame)
@@ -360,6 +359,23 @@ def _gradient(luma: np.ndarray) -> np.ndarray:
     out = cv2.blur(gx, (3, 3))
     out *= 0.25
     return out
+
+
+def _left_and_unchanged(left_before: tuple[np.ndarray, np.ndarray] | None, frame: np.ndarray, sample: np.ndarray,
+                        factor: float) -> Callable[[], np.ndarray] | None:
+    """shadows.shadow_left's ``kept``: the bed ``left_before`` read as a shadow that left (material_evidence), where
+    ``frame`` is unchanged since (:func:`unchanged_since`), worked out at its first use only: shadow_left asks only
+    where a region fails its size test, seldom, and the two blurs of the crop cost about 5 ms a check."""
+    if left_before is None or not left_before[1].any():
+        return None
+    then, left_then = left_before
+    memo: list[np.ndarray] = []
+
+    def kept() -> np.ndarray:
+        if not memo:
+            memo.append(left_then & unchanged_since(then, frame, sample, factor))
+        return memo[0]
+    return kept
 
 
 def unchanged_since(before: np.ndarray, frame: np.ndarray, sample: np.ndarray, factor: float) -> np.ndarray:

@@ -15,6 +15,8 @@ passes for a shadow that left, and such a part is camouflaged anyway.
 """
 from __future__ import annotations
 
+from typing import Callable
+
 import cv2
 import numpy as np
 
@@ -36,7 +38,7 @@ _READS = 12
 
 def shadow_left(luma_f: np.ndarray, luma_b: np.ndarray, sample: np.ndarray, bright_noise: float,
                 factor: float, where: np.ndarray, min_ratio: float, prior: np.ndarray,
-                surroundings: np.ndarray, kept: np.ndarray | None = None) -> np.ndarray:
+                surroundings: np.ndarray, kept: Callable[[], np.ndarray] | None = None) -> np.ndarray:
     """(h, w) bool: the pixels of ``where`` ((h, w) bool: brighter than the background) where the
     frame (``luma_f``, (h, w) float32) may be brighter than the background (``luma_b``, (h, w) float32,
     already at the frame's exposure) only because a shadow in the background frame has moved away: not
@@ -48,8 +50,8 @@ def shadow_left(luma_f: np.ndarray, luma_b: np.ndarray, sample: np.ndarray, brig
     than the bed too) only the correlation with the bed's grain tells the bed, never its absence. A head's
     or gantry's shadow is large: a region that passes is kept only where a quarter of it lies outside
     ``surroundings`` ((h, w) bool, the part's surroundings), so a reflection or a skirt next to the part
-    never passes for one; nor where half of it is ``kept`` ((h, w) bool: bed this camera read so at its previous
-    check, unchanged in the frame since): a shadow that left the bed beside a growing part lies ever more inside the
+    never passes for one; nor where half of it is ``kept`` (a function giving an (h, w) bool mask, read only where a
+    region fails that test: bed this camera read so at its previous check, unchanged in the frame since): a shadow that left the bed beside a growing part lies ever more inside the
     part's surroundings, which grow with it, while nothing there changed. The work is done on the box around the
     pixels that may have been in a shadow only (on many scenes the part's own lit faces: about 2-3 ms per
     camera-check, see docs/detection-shadows.md)."""
@@ -88,8 +90,8 @@ def shadow_left(luma_f: np.ndarray, luma_b: np.ndarray, sample: np.ndarray, brig
         area = np.bincount(labels[passed], minlength=count)
         near = np.bincount(labels[passed & surroundings[inner]], minlength=count)
         large = near <= 0.75 * area
-        if kept is not None:
-            large |= np.bincount(labels[passed & kept[inner]], minlength=count) >= 0.5 * area
+        if kept is not None and not large[1:].all():
+            large |= np.bincount(labels[passed & kept()[inner]], minlength=count) >= 0.5 * area
         large[0] = False
         passed &= large[labels]
     out[inner] = passed
