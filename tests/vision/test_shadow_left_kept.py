@@ -66,7 +66,8 @@ def test_material_that_landed_there_since_is_material():
     background, before = scene(seed=3)
     _, frame = scene(with_blob=True, seed=4)
     blob = Box(77, 143, 93, 157).mask()
-    assert not unchanged_since(before, frame, np.flatnonzero(SAMPLE), 5.0)[blob].any()
+    assert not unchanged_since(before, frame, np.flatnonzero(SAMPLE), 5.0, LEFT.mask())[blob].any()
+    assert unchanged_since(before, scene(seed=5)[1], np.flatnonzero(SAMPLE), 5.0, LEFT.mask())[LEFT.mask()].mean() > 0.95
     evidence = material_evidence(background, frame, SURROUNDINGS, SAMPLE, part=PART.mask(),
                                  left_before=(before, LEFT.mask()))
     assert evidence.strong[blob].mean() > 0.9
