@@ -14,6 +14,7 @@ then tell its material from a shadow or a change of light (:func:`coverage_by_pa
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cache
 from typing import Callable
 
 import cv2
@@ -213,11 +214,7 @@ def material_evidence(
         # (the sampled pixels only: a float copy of the whole frame is not needed, and the background's is
         # made once, already scaled)
         rows, cols = np.divmod(sample, background.shape[1])
-        bg_s, fr_s = background[rows, cols].astype(np.float32), frame[rows, cols].astype(np.float32)
-        ok = np.minimum(np.minimum(bg_s[:, 0], bg_s[:, 1]), bg_s[:, 2]) > 8.0
-        if np.count_nonzero(ok) >= 50:
-            gains = np.median(fr_s[ok] / bg_s[ok], axis=0).astype(np.float32)
-            gains = np.clip(gains, 0.2, 5.0)
+        gains = exposure_gains(background[rows, cols].astype(np.float32), frame[rows, cols].astype(np.float32))
     kept = _left_and_unchanged(left_before, frame, sample, material_factor)
     args = (background, frame, prior, sample, material_factor, bed_factor, previous, part, palette, gains, kept)
     bg = _scaled(background, gains)
@@ -369,13 +366,17 @@ def _left_and_unchanged(left_before: tuple[np.ndarray, np.ndarray] | None, frame
     if left_before is None or not left_before[1].any():
         return None
     then, left_then = left_before
-    memo: list[np.ndarray] = []
+    return cache(lambda: unchanged_since(then, frame, sample, factor, left_then))
 
-    def kept() -> np.ndarray:
-        if not memo:
-            memo.append(unchanged_since(then, frame, sample, factor, left_then))
-        return memo[0]
-    return kept
+
+def exposure_gains(reference: np.ndarray, frame: np.ndarray) -> np.ndarray:
+    """(3,) float32 per-channel gains that bring ``reference`` to ``frame``'s exposure and white balance: the median
+    ratio over pixels known to be bed ((n, 3) float32 each, the same pixels), those with a channel under 8 grey levels
+    left out (their ratio is noise), clipped to 0.2-5; ones where fewer than 50 pixels are left."""
+    ok = reference.min(axis=1) > 8.0
+    if np.count_nonzero(ok) < 50:
+        return np.ones(3, np.float32)
+    return np.clip(np.median(frame[ok] / reference[ok], axis=0), 0.2, 5.0).astype(np.float32)
 
 
 def unchanged_since(before: np.ndarray, frame: np.ndarray, sample: np.ndarray, factor: float,
@@ -391,9 +392,7 @@ def unchanged_since(before: np.ndarray, frame: np.ndarray, sample: np.ndarray, f
         return out
     rows, cols = np.divmod(sample, frame.shape[1])
     now_s, then_s = frame[rows, cols].astype(np.float32), before[rows, cols].astype(np.float32)
-    ok = then_s.min(axis=1) > 8.0
-    gains = (np.median(now_s[ok] / then_s[ok], axis=0) if np.count_nonzero(ok) >= 50
-             else np.ones(3, np.float32)).astype(np.float32)
+    gains = exposure_gains(then_s, now_s)
     noise = max(float(np.percentile(np.abs(now_s - then_s * gains).max(axis=1), 90)), 1.0)
     y0, y1, x0, x1 = box
     inner = (slice(y0, y1), slice(x0, x1))

@@ -50,11 +50,11 @@ def shadow_left(luma_f: np.ndarray, luma_b: np.ndarray, sample: np.ndarray, brig
     than the bed too) only the correlation with the bed's grain tells the bed, never its absence. A head's
     or gantry's shadow is large: a region that passes is kept only where a quarter of it lies outside
     ``surroundings`` ((h, w) bool, the part's surroundings), so a reflection or a skirt next to the part
-    never passes for one; nor where half of it is ``kept`` (a function giving an (h, w) bool mask, read only where a
-    region fails that test: bed this camera read so at its previous check, unchanged in the frame since): a shadow that left the bed beside a growing part lies ever more inside the
-    part's surroundings, which grow with it, while nothing there changed. The work is done on the box around the
-    pixels that may have been in a shadow only (on many scenes the part's own lit faces: about 2-3 ms per
-    camera-check, see docs/detection-shadows.md)."""
+    never passes for one; nor where half of it is ``kept`` (a function giving an (h, w) bool mask, called only where
+    a region fails that test: bed this camera read so at its previous check, unchanged in the frame since): a shadow
+    that left the bed beside a growing part lies ever more inside the part's surroundings, which grow with it, while
+    nothing there changed. The work is done on the box around the pixels that may have been in a shadow only (on
+    many scenes the part's own lit faces: about 2-3 ms per camera-check, see docs/detection-shadows.md)."""
     out = np.zeros(luma_f.shape, bool)
     if sample.size < 50 or not where.any():
         return out

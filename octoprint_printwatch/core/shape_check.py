@@ -709,8 +709,9 @@ def check_shape(
     previous = cropped(previous_mask, (h, w), crop)
 
     left_then = None
-    if left_before is not None and left_before[0].shape[:2] == (h, w) and left_before[1].shape == (h, w):
-        left_then = (left_before[0][crop], left_before[1][crop])
+    if left_before is not None and left_before[0].shape[:2] == (h, w):
+        frame_then, left = left_before
+        left_then = (frame_then[crop], cropped(left, (h, w), crop))
     evidence = material_evidence(background[crop], frame[crop], prior, bed_sample,
                                  material_factor=material_factor, bed_factor=bed_factor, previous=previous,
                                  part=distance <= tol, palette=palette, relight_above=max_changed_bed_fraction,

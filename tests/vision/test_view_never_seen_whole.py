@@ -13,7 +13,10 @@ a failure only such views read, a view's first look, and a rig with no view that
 from __future__ import annotations
 
 from dataclasses import replace
+from pathlib import Path
 
+from octoprint_printwatch.core.pipeline import evaluate_recording
+from octoprint_printwatch.core.recording import load_recording
 from octoprint_printwatch.core.settings import DetectionSettings
 from octoprint_printwatch.core.shape_check import ShapeResult
 from octoprint_printwatch.core.verdict import decide, without_views_never_seen_whole
@@ -25,6 +28,12 @@ def view(name: str, *, missing: float = 0.0, extra: float = 0.0) -> ShapeResult:
     return ShapeResult(name, missing + extra, missing + extra, missing, extra, 0.0, 0.0, 500, 5000, 100.0, (0, 0),
                        7.0, 50.0, passed=not failed, usable=True, decisive=failed and missing > 0 and extra > 0,
                        reasons=[f"{name}: shape differs from the model"] if failed else [])
+
+
+def checks_by_layer(recording: str) -> dict[int, dict]:
+    """{layer: the check's evaluate document} of a cut recording in tests/data/recordings."""
+    folder = Path(__file__).resolve().parent.parent / "data" / "recordings" / recording
+    return {c["layer"]: c for c in evaluate_recording(load_recording(folder))["checks"]}
 
 
 def decided(shape: dict[str, ShapeResult], seen: dict[str, float | None]) -> tuple[str, list[str]]:
@@ -71,13 +80,7 @@ def test_a_print_seen_partly_by_one_camera_is_not_paused_and_its_spaghetti_is():
     the bed's colour on glass. s1 sees only the part's own cast shadow on the lit glass beside its upper faces, lays
     the outline 24 px down on it and at layer 120 reads the part above it as 18 % "unexpected material"; s2 saw the
     part whole and passes. The spaghetti has begun by layer 200, and s2 reads it."""
-    from pathlib import Path
-
-    from octoprint_printwatch.core.pipeline import evaluate_recording
-    from octoprint_printwatch.core.recording import load_recording
-
-    folder = Path(__file__).resolve().parent.parent / "data" / "recordings" / "box_like_bed_glass_shadow_pair"
-    checks = {c["layer"]: c for c in evaluate_recording(load_recording(folder))["checks"]}
+    checks = checks_by_layer("box_like_bed_glass_shadow_pair")
     assert [checks[layer]["verdict"] for layer in (60, 80, 100, 120)] == ["ok"] * 4
     assert any("s1: never saw the part whole" in r for r in checks[120]["reasons"])
     assert checks[200]["verdict"] == "fail"
@@ -98,13 +101,7 @@ def test_a_layer_shift_read_only_by_a_view_that_never_saw_the_part_whole_does_no
     newest layers "10.6 mm sideways" on the older ones, alone: the offset of the outline it laid by the faces it saw,
     not of the layers (8d1777c pauses this normal print there). A layer-shift reading is the newest band against the
     view's own outline, so a view that never saw the part whole gives none, with or without another view."""
-    from pathlib import Path
-
-    from octoprint_printwatch.core.pipeline import evaluate_recording
-    from octoprint_printwatch.core.recording import load_recording
-
-    folder = Path(__file__).resolve().parent.parent / "data" / "recordings" / "stack_like_bed_kapton_one_view"
-    checks = {c["layer"]: c for c in evaluate_recording(load_recording(folder))["checks"]}
+    checks = checks_by_layer("stack_like_bed_kapton_one_view")
     assert checks[55]["verdict"] == "ok"
     assert any("s1: never saw the part whole" in r and "no layer-shift reading" in r for r in checks[55]["reasons"])
 
@@ -117,13 +114,7 @@ def test_a_layer_shift_read_only_by_a_view_a_partial_look_anchored_does_not_paus
     not of the layers (b612c46 pauses this normal print there). A layer-shift reading is the newest band against the
     view's own outline, so a view whose anchor a partial look laid gives none. The view is the only one reading a
     shift: the check decided again without it reads none, and must not read it back from every view."""
-    from pathlib import Path
-
-    from octoprint_printwatch.core.pipeline import evaluate_recording
-    from octoprint_printwatch.core.recording import load_recording
-
-    folder = Path(__file__).resolve().parent.parent / "data" / "recordings" / "L_like_bed_kapton_partly_anchored"
-    checks = {c["layer"]: c for c in evaluate_recording(load_recording(folder))["checks"]}
+    checks = checks_by_layer("L_like_bed_kapton_partly_anchored")
     assert [c["verdict"] for c in checks.values()] == ["ok"] * 8
     assert any("s0: its outline was anchored by a look that saw under" in r and "no layer-shift reading" in r
                for r in checks[150]["reasons"])
