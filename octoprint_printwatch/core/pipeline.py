@@ -865,8 +865,10 @@ class CheckRunner:
             if not result.usable or result.passed:
                 continue
             if state.anchor is not None:
-                # it passed before (or learned already): only an anchor pinned at the bound may move
-                self._learn_beyond_pinned_anchor(name, z, result, shape, shape_inputs, errors, in_place)
+                # it passed before (or learned already): an anchor only short looks laid may be laid again, else
+                # only an anchor pinned at the bound may move
+                if not self._anchor_again_once_tall(name, z, result, shape, shape_inputs, errors):
+                    self._learn_beyond_pinned_anchor(name, z, result, shape, shape_inputs, errors, in_place)
                 continue
             pending, state.pending_offset = state.pending_offset, None
             vouching = [other for other in in_place if other != name]
@@ -905,10 +907,17 @@ class CheckRunner:
                       errors: dict[str, float | None]) -> None:
         """Make ``probe``'s shift the camera's learned calibration offset and ``probe`` (with ``reason``) its
         result at this check (updates ``shape`` and ``errors``)."""
+        self.cameras[name].calibration_offset = probe.shift_px
+        self._adopt_place(name, z, probe, reason, shape, errors)
+
+    def _adopt_place(self, name: str, z: float, probe: ShapeResult, reason: str, shape: dict[str, ShapeResult],
+                     errors: dict[str, float | None]) -> None:
+        """Make ``probe``'s shift the camera's anchor, held for the rest of the print, and ``probe`` (with
+        ``reason``) its result at this check (updates ``shape`` and ``errors``)."""
         state = self.cameras[name]
-        state.calibration_offset = state.anchor = probe.shift_px
+        state.anchor = probe.shift_px
         state.anchor_share = probe.outline_coverage
-        state.placed_at = [probe.shift_px]   # (the earlier places lay within the old reach: not where the part is)
+        state.placed_at = [probe.shift_px]   # (the earlier places are not where the part is)
         # held there: the alignment's prior, centred on the stated calibration, would walk it back
         state.frozen = True
         probe.reasons.append(reason)
@@ -918,6 +927,43 @@ class CheckRunner:
         state.previous_mask, state.last_growth = probe.observed_mask, probe.growth_pct
         if probe.palette is not None:
             state.palette = probe.palette
+
+    def _anchor_again_once_tall(self, name: str, z: float, result: ShapeResult, shape: dict[str, ShapeResult],
+                                shape_inputs: dict[str, dict], errors: dict[str, float | None]) -> bool:
+        """A camera whose anchor only short looks laid, failing where the part now stands tall in its view: lay the
+        outline again, free of that anchor, when the part clearly fits elsewhere within the bound and its own
+        frames show it in place and grown there (updates ``shape``; True when it did).
+
+        A first look at a part a few millimetres tall on a brim of its colour, or a top on its shadow, fits the
+        outline anywhere along the brim, and the anchor it leaves may sit 10-20 px off the part; while the part
+        is short that still passes, and the anchor is held only once a tall look passes (``CameraState.frozen``).
+        As the part rises out of the brim, its side beyond the misplaced outline reads as extra material and the
+        bed inside it as missing, at every check, and no look passes to move the anchor. A tall look is
+        unambiguous: the part fits at one place, clearly (half the threshold and half the failing error to spare,
+        its newest band in place, not decisive), and the camera's frames tell a misplaced outline from a part
+        that moved: the material seen at the previous check is still seen (a part that slid or was knocked off is
+        not) and the part grew there as the model says (a stopped or detached part does not). Once per print:
+        the new anchor is held (frozen)."""
+        state = self.cameras[name]
+        args = shape_inputs[name]
+        regions = args["regions"]
+        if (state.frozen or result.first_look or _silhouette_rows(regions.silhouette) < 2 * regions.max_shift_px
+                or not _still_in_place(result.observed_mask, args.get("last_observed"))):
+            return False
+        refit = check_shape(**dict(args, anchor=None, max_drift=2))
+        if not (refit.usable and refit.passed and not refit.decisive
+                and refit.error_pct <= refit.threshold / 2.0 and refit.error_pct <= result.error_pct / 2.0
+                and (refit.band_error_pct is None or refit.band_error_pct <= self.settings.band_threshold_pct)
+                and (rise := rise_since_previous_check(refit)) is not None and rise >= CALIBRATION_GROWTH_PCT
+                and _px_apart(refit.shift_px, state.anchor) > args["max_drift"]):
+            return False
+        moved = _px_apart(refit.shift_px, state.anchor)
+        state.shift_candidates = refit.shift_candidates
+        self._adopt_place(name, z, refit, (
+            f"{name}: the outline its first, short looks laid {moved} px off the part; the part, tall now, fits at "
+            f"({refit.shift_px[0]:+d}, {refit.shift_px[1]:+d}) px, in place since the previous check and grown there "
+            f"({rise:.0f} % of the expected rise): its checks use that place from now on"), shape, errors)
+        return True
 
     def _learn_beyond_pinned_anchor(self, name: str, z: float, result: ShapeResult, shape: dict[str, ShapeResult],
                                     shape_inputs: dict[str, dict], errors: dict[str, float | None],
