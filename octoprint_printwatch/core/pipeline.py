@@ -26,6 +26,7 @@ from .settings import DetectionSettings
 from .alignment import near_any
 from .growth import GROWTH_SPAN_CHECKS
 from .layer_shift import LayerShift, band_reads_shifted
+from .masks import dilate, shift_mask
 from .shape_check import ExpectedRegions, ShapeResult, check_shape, not_decisive_where_it_stood
 from .nest import SOLID_MIN_COVERAGE, STALL_READ_BELOW_GROWTH_PCT
 from .verdict import (RISE_HELD_READINGS, band_shifts_of, decide, finest_reading, held_rise, layer_shift_of,
@@ -942,19 +943,27 @@ class CheckRunner:
         unambiguous: the part fits at one place, clearly (half the threshold and half the failing error to spare,
         its newest band in place, not decisive), and the camera's frames tell a misplaced outline from a part
         that moved: the material seen at the previous check is still seen (a part that slid or was knocked off is
-        not) and the part grew there as the model says (a stopped or detached part does not). Once per print:
-        the new anchor is held (frozen)."""
+        not), the part grew there as the model says (a stopped or detached part does not), and the part as the
+        previous check saw it covers the model's outline of then at the new place as well as where that check laid
+        it (a layer shift moves the newest layers only: an outline fitted on them leaves the layers below beside
+        it). Once per print: the new anchor is held (frozen)."""
         state = self.cameras[name]
         args = shape_inputs[name]
         regions = args["regions"]
-        if (state.frozen or result.first_look or _silhouette_rows(regions.silhouette) < 2 * regions.max_shift_px
+        # (args["measure_growth"]: its last look is the previous check's, whose model outline is known)
+        if (state.frozen or result.first_look or not args["measure_growth"]
+                or _silhouette_rows(regions.silhouette) < 2 * regions.max_shift_px
                 or not _still_in_place(result.observed_mask, args.get("last_observed"))):
             return False
         refit = check_shape(**dict(args, anchor=None, max_drift=2))
+        before, then = args.get("last_observed"), self.plan.view(name, self.previous_z).silhouette
+        placed_then = args.get("shift_before") or state.anchor
         if not (refit.usable and refit.passed and not refit.decisive
                 and refit.error_pct <= refit.threshold / 2.0 and refit.error_pct <= result.error_pct / 2.0
                 and (refit.band_error_pct is None or refit.band_error_pct <= self.settings.band_threshold_pct)
                 and (rise := rise_since_previous_check(refit)) is not None and rise >= CALIBRATION_GROWTH_PCT
+                and _covered_share(before, then, refit.shift_px, regions.tolerance_px)
+                >= _covered_share(before, then, placed_then, regions.tolerance_px)
                 and _px_apart(refit.shift_px, state.anchor) > args["max_drift"]):
             return False
         moved = _px_apart(refit.shift_px, state.anchor)
@@ -1102,6 +1111,14 @@ def _still_in_place(observed: np.ndarray | None, before: np.ndarray | None, shar
     if observed is None or before is None or before.shape != observed.shape or not before.any():
         return False
     return np.count_nonzero(observed & before) >= share * np.count_nonzero(before)
+
+
+def _covered_share(observed: np.ndarray, silhouette: np.ndarray, shift: tuple[int, int], tolerance_px: float) -> float:
+    """The share of ``silhouette`` ((h, w) bool, the model's outline at the calibrated place) moved by ``shift``
+    (dx, dy) that ``observed`` ((h, w) bool material) covers, to within ``tolerance_px``."""
+    expected = shift_mask(silhouette, int(shift[0]), int(shift[1]))
+    area = np.count_nonzero(expected)
+    return float(np.count_nonzero(expected & dilate(observed, tolerance_px))) / area if area else 0.0
 
 
 def _silhouette_rows(mask: np.ndarray) -> int:
