@@ -470,6 +470,8 @@ class CameraState:
     palette: np.ndarray | None = None
     #: (h, w) bool observed mask of its last passing check (background removal's prior)
     previous_mask: np.ndarray | None = None
+    #: (z, (dx, dy) px): the height of that check and where it laid the outline (None: no passing check yet)
+    previous_mask_at: tuple[float, tuple[int, int]] | None = None
     #: (h, w) bool observed mask of its last usable check, and the height it was seen at (the growth test
     #: needs the previous check's)
     last_observed: np.ndarray | None = None
@@ -693,7 +695,7 @@ class CheckRunner:
             if result.palette is not None and places:
                 state.palette = result.palette
             if places:
-                state.previous_mask = result.observed_mask
+                state.previous_mask, state.previous_mask_at = result.observed_mask, (z, result.shift_px)
                 state.seen_share = max(result.outline_coverage, state.seen_share or 0.0)
                 state.placed(result, shape_args["max_drift"],
                              tall=_silhouette_rows(regions.silhouette) >= 2 * regions.max_shift_px)
@@ -926,6 +928,7 @@ class CheckRunner:
         errors[name] = probe.error_pct
         state.saw(probe.observed_mask, z, probe.shift_px)
         state.previous_mask, state.last_growth = probe.observed_mask, probe.growth_pct
+        state.previous_mask_at = (z, probe.shift_px)
         if probe.palette is not None:
             state.palette = probe.palette
 
@@ -944,9 +947,10 @@ class CheckRunner:
         its newest band in place, not decisive), and the camera's frames tell a misplaced outline from a part
         that moved: the material seen at the previous check is still seen (a part that slid or was knocked off is
         not), the part grew there as the model says (a stopped or detached part does not), and the part as the
-        previous check saw it covers the model's outline of then at the new place as well as where that check laid
-        it (a layer shift moves the newest layers only: an outline fitted on them leaves the layers below beside
-        it). Once per print: the new anchor is held (frozen)."""
+        camera's last passing check saw it covers the model's outline of then at the new place as well as where that
+        check laid it: an anchor that was wrong was wrong then too, while a part that moved or layers that shifted
+        since leave that look's part at the old place (an outline fitted on shifted newest layers leaves the
+        layers below beside it). Once per print: the new anchor is held (frozen)."""
         state = self.cameras[name]
         args = shape_inputs[name]
         regions = args["regions"]
@@ -956,8 +960,10 @@ class CheckRunner:
                 or not _still_in_place(result.observed_mask, args.get("last_observed"))):
             return False
         refit = check_shape(**dict(args, anchor=None, max_drift=2))
-        before, then = args.get("last_observed"), self.plan.view(name, self.previous_z).silhouette
-        placed_then = args.get("shift_before") or state.anchor
+        if state.previous_mask_at is None:
+            return False
+        z_then, placed_then = state.previous_mask_at
+        before, then = state.previous_mask, self.plan.view(name, z_then).silhouette
         if not (refit.usable and refit.passed and not refit.decisive
                 and refit.error_pct <= refit.threshold / 2.0 and refit.error_pct <= result.error_pct / 2.0
                 and (refit.band_error_pct is None or refit.band_error_pct <= self.settings.band_threshold_pct)
