@@ -16,6 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
+from octoprint_printwatch.core.masks import shift_mask
+
 from .check_runs import run_checks
 
 RECORDING = Path(__file__).resolve().parents[1] / "data" / "recordings" / "polygon_red_brim_short_anchor_pair"
@@ -24,7 +26,7 @@ RECORDING = Path(__file__).resolve().parents[1] / "data" / "recordings" / "polyg
 def _run(before_last=None) -> list:
     def hook(runner, results: list) -> None:
         if len(results) == 4 and before_last is not None:
-            before_last(runner.cameras["s0"])
+            before_last(runner.cameras["s0"], runner)
     return run_checks(RECORDING, hook)
 
 
@@ -40,13 +42,22 @@ def test_the_tall_part_beside_an_outline_short_looks_laid_does_not_pause_the_pri
 
 def test_an_anchor_a_tall_look_laid_stays_and_the_print_pauses():
     """The rule rests on the anchor not being held yet: held, the same frames pause the print as before."""
-    def hold(state) -> None:
+    def hold(state, runner) -> None:
         state.frozen = True
     assert _run(hold)[-1].verdict == "fail"
 
 
 def test_a_part_not_where_it_was_at_the_previous_check_is_not_laid_again():
     """A part that slid or was knocked off since the previous check is not in place: no new outline excuses it."""
-    def moved(state) -> None:
+    def moved(state, runner) -> None:
         state.last_observed = np.roll(state.last_observed, 25, axis=1)
     assert _run(moved)[-1].verdict == "fail"
+
+
+def test_a_part_its_last_passing_look_saw_where_the_outline_lay_is_not_laid_again():
+    """Had the camera's last passing look seen the part exactly where the anchor put the outline, the part (or its
+    newest layers) moved since: the frames of now fit elsewhere, and the print pauses."""
+    def seen_at_the_anchor(state, runner) -> None:
+        z_then, placed_then = state.previous_mask_at
+        state.previous_mask = shift_mask(runner.plan.view("s0", z_then).silhouette, *placed_then)
+    assert _run(seen_at_the_anchor)[-1].verdict == "fail"
