@@ -486,7 +486,7 @@ class CameraState:
     older_observed: list = field(default_factory=list)
     #: the growth it read at its last usable check (None: it could not measure one)
     last_growth: float | None = None
-    #: its last RISE_HELD_READINGS readings of the rise (fine, else over the span, else coarse) at the checks that
+    #: its last RISE_HELD_READINGS + 1 readings of the rise (fine, else over the span, else coarse) at the checks that
     #: gave one since it was last unusable, oldest first, and whether its previous check gave one: held_rise, for
     #: decide's stall rules
     rise_readings: tuple[float, ...] = ()
@@ -622,7 +622,8 @@ class CheckRunner:
         extra_before = {name: state.last_extra for name, state in self.cameras.items() if state.last_extra is not None}
         rise_before = {name: state.last_rise for name, state in self.cameras.items() if state.last_rise is not None}
         held_rise_before = {name: rise for name, state in self.cameras.items()
-                            if (rise := held_rise(state.rise_readings, state.read_rise_last_check)) is not None}
+                            if (rise := held_rise(state.rise_readings, state.read_rise_last_check,
+                                                  settings.min_growth_pct)) is not None}
         missing_before = {name: state.last_missing for name, state in self.cameras.items()
                           if state.last_missing is not None}
         missing_at_rise = {name: state.rise_missing for name, state in self.cameras.items()
@@ -755,7 +756,8 @@ class CheckRunner:
             state.read_rise_last_check = reading is not None
             if reading is not None:
                 self.rise_ever_read = True
-                state.rise_readings = (*state.rise_readings, reading)[-RISE_HELD_READINGS:]
+                # (one more than a held rise needs: a stop late in an interval reads part of the rise first)
+                state.rise_readings = (*state.rise_readings, reading)[-RISE_HELD_READINGS - 1:]
             state.last_rise = rise_since_previous_check(r)
             if verdict == "ok":   # (a check that failed is no healthy look: a part knocked loose still "rises")
                 state.missing_while_rising = lowest_missing_while_rising(

@@ -269,14 +269,24 @@ def rise_read(r: ShapeResult) -> float:
     return float(max(_rise_readings(r), default=0.0))
 
 
-def held_rise(readings: Sequence[float], read_at_previous: bool) -> float | None:
+def held_rise(readings: Sequence[float], read_at_previous: bool, min_growth_pct: float = 15.0) -> float | None:
     """The rise (% of the expected) a view read at its previous check where its readings before held it: the lowest
     of its last :data:`RISE_HELD_READINGS` readings (``readings``: its finest, fine, else over the span, else coarse,
     at its checks that gave one since it was last unusable, oldest first), or None where the previous check gave no
-    reading (``read_at_previous`` False) or too few readings were given."""
+    reading (``read_at_previous`` False) or too few readings were given.
+
+    A stop late in the interval before the previous check leaves that check reading part of the rise
+    (``min_growth_pct`` to :data:`COARSE_ROSE_BEFORE_PCT`: the layers printed before the stop), the checks after it
+    none; where the :data:`RISE_HELD_READINGS` readings before that partial one held a rise, the view held that rise
+    up to the stop (as ``missing_since_rise`` keeps its missing material through such a reading)."""
     if not read_at_previous or len(readings) < RISE_HELD_READINGS:
         return None
-    return float(min(readings[-RISE_HELD_READINGS:]))
+    held = float(min(readings[-RISE_HELD_READINGS:]))
+    before_stop = readings[-RISE_HELD_READINGS - 1:-1]
+    if (held < COARSE_ROSE_BEFORE_PCT and min_growth_pct <= readings[-1] < COARSE_ROSE_BEFORE_PCT
+            and len(before_stop) == RISE_HELD_READINGS and min(before_stop) >= COARSE_ROSE_BEFORE_PCT):
+        return float(min(before_stop))
+    return held
 
 
 #: A view keeps its missing material from its last rising check (missing_since_rise) for at most this many
