@@ -957,13 +957,11 @@ class CheckRunner:
         args = shape_inputs[name]
         regions = args["regions"]
         # (args["measure_growth"]: its last look is the previous check's, whose model outline is known)
-        if (state.frozen or result.first_look or not args["measure_growth"]
+        if (state.frozen or result.first_look or not args["measure_growth"] or state.previous_mask_at is None
                 or _silhouette_rows(regions.silhouette) < 2 * regions.max_shift_px
                 or not _still_in_place(result.observed_mask, args.get("last_observed"))):
             return False
         refit = check_shape(**dict(args, anchor=None, max_drift=2))
-        if state.previous_mask_at is None:
-            return False
         z_then, placed_then = state.previous_mask_at
         before, then = state.previous_mask, self.plan.view(name, z_then).silhouette
         if not (refit.usable and refit.passed and not refit.decisive

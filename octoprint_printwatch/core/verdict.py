@@ -159,10 +159,11 @@ def unseen_by_the_other_views(result: ShapeResult, usable: Mapping[str, ShapeRes
     """True when ``result`` fails on extra material (more than half its missing material) that every other ``usable``
     view not read against a relit background (at least one) does not see at all (:func:`sees_nothing_extra`) and none
     of them reads finely as rising under ``VISIBLY_RISING_PCT`` of the model's rise (a part that stops rising while
-    material spills beside it is spaghetti starting): when that extra material is not decisive and the newest band is within its threshold, or when it is decisive
-    (four times the threshold, or with missing material) but ``MOSTLY_EXTRA_RATIO`` times the missing material, the
-    part not found whole elsewhere, while this view, not relit, and another view not relit read the part rising as the
-    model says since their previous check (:func:`rise_since_previous_check`: fine, or to the pixel).
+    material spills beside it is spaghetti starting): when that extra material is not decisive and the newest band
+    is within its threshold, or when it is decisive (four times the threshold, or with missing material) but
+    ``MOSTLY_EXTRA_RATIO`` times the missing material, the part not found whole elsewhere, while this view, not relit,
+    and another view not relit read the part rising as the model says since their previous check
+    (:func:`rise_since_previous_check`: fine, or to the pixel).
 
     Material standing beside the part stands on the bed, where other cameras look too: a strand or blob shows some
     extra in a second view, and a part that detached or spills strands does not keep rising in the view that sees
