@@ -270,7 +270,8 @@ def rise_read(r: ShapeResult) -> float:
     return float(max(_rise_readings(r), default=0.0))
 
 
-def held_rise(readings: Sequence[float], read_at_previous: bool, min_growth_pct: float = 15.0) -> float | None:
+def held_rise(readings: Sequence[float], read_at_previous: bool,
+              min_growth_pct: float = DetectionSettings.min_growth_pct) -> float | None:
     """The rise (% of the expected) a view read at its previous check where its readings before held it: the lowest
     of its last :data:`RISE_HELD_READINGS` readings (``readings``: its finest, fine, else over the span, else coarse,
     at its checks that gave one since it was last unusable, oldest first), or None where the previous check gave no
