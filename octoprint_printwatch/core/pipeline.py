@@ -29,8 +29,8 @@ from .layer_shift import LayerShift, band_reads_shifted
 from .masks import dilate, shift_mask
 from .shape_check import ExpectedRegions, ShapeResult, check_shape, not_decisive_where_it_stood
 from .nest import SOLID_MIN_COVERAGE, STALL_READ_BELOW_GROWTH_PCT
-from .verdict import (RISE_HELD_READINGS, band_shifts_of, decide, finest_reading, held_rise, layer_shift_of,
-                      lowest_missing_while_rising, missing_since_rise, rise_since_previous_check,
+from .verdict import (RISE_HELD_READINGS, VISIBLY_RISING_PCT, band_shifts_of, decide, finest_reading, held_rise,
+                      layer_shift_of, lowest_missing_while_rising, missing_since_rise, rise_since_previous_check,
                       without_views_never_seen_whole)
 
 VERDICTS = ("ok", "fail", "unknown")
@@ -967,7 +967,7 @@ class CheckRunner:
         if not (refit.usable and refit.passed and not refit.decisive
                 and refit.error_pct <= refit.threshold / 2.0 and refit.error_pct <= result.error_pct / 2.0
                 and (refit.band_error_pct is None or refit.band_error_pct <= self.settings.band_threshold_pct)
-                and (rise := rise_since_previous_check(refit)) is not None and rise >= CALIBRATION_GROWTH_PCT
+                and (rise := rise_since_previous_check(refit)) is not None and rise >= VISIBLY_RISING_PCT
                 and _covered_share(before, then, refit.shift_px, regions.tolerance_px)
                 >= _covered_share(before, then, placed_then, regions.tolerance_px)
                 and _px_apart(refit.shift_px, state.anchor) > args["max_drift"]):

@@ -283,12 +283,11 @@ def held_rise(readings: Sequence[float], read_at_previous: bool,
     up to the stop (as ``missing_since_rise`` keeps its missing material through such a reading)."""
     if not read_at_previous or len(readings) < RISE_HELD_READINGS:
         return None
-    held = float(min(readings[-RISE_HELD_READINGS:]))
     before_stop = readings[-RISE_HELD_READINGS - 1:-1]
-    if (held < COARSE_ROSE_BEFORE_PCT and min_growth_pct <= readings[-1] < COARSE_ROSE_BEFORE_PCT
-            and len(before_stop) == RISE_HELD_READINGS and min(before_stop) >= COARSE_ROSE_BEFORE_PCT):
+    if (min_growth_pct <= readings[-1] < COARSE_ROSE_BEFORE_PCT and len(before_stop) == RISE_HELD_READINGS
+            and min(before_stop) >= COARSE_ROSE_BEFORE_PCT):
         return float(min(before_stop))
-    return held
+    return float(min(readings[-RISE_HELD_READINGS:]))
 
 
 #: A view keeps its missing material from its last rising check (missing_since_rise) for at most this many
