@@ -87,6 +87,12 @@ SHIFT_OVERHANG_SHARE = 0.25
 #: its trailing side, while an outline that is just swollen (a glowing filament's halo, blur, a top
 #: over-extruded) sticks out on every side and supports both.
 SHIFT_OPPOSITE_MAX = 0.25
+#: A camera counts the pixels a shift changes at most as this many times the ones it decides there (material or
+#: bed, confirming or contradicting): pixels a view cannot tell apart (translucent filament against a bright bed) are
+#: no evidence either way, and in full they would dilute the share the other views confirm (cross-check seed 37
+#: `031_layer_shift`: s0L confirms 1,191 of 1,378 changed pixels, its pair partner s0R decides about 16 of 1,018).
+#: A view deciding most of them (0.8-0.95 where the band is seen) is not changed.
+SHIFT_UNDECIDED_PER_DECIDED = 4.0
 #: The top of the part as one camera sees it may sit this far (px) from where one height error puts it in
 #: every view: that camera's calibration residual.
 HEIGHT_NULL_TOLERANCE_PX = 1
@@ -546,6 +552,9 @@ def _pooled(views: Mapping[str, BandShift], grid: np.ndarray, vertical: bool = T
         weight = np.clip((shown - 0.5 * view.min_dx) / (0.5 * view.min_dx), 0.0, 1.0) * ok
         values = np.zeros((6, len(grid)))
         values[:, ok] = view.maps[:, iy[ok], ix[ok]]
+        most = SHIFT_UNDECIDED_PER_DECIDED * (values[0] + values[1])
+        values[2] = np.minimum(values[2], most)
+        values[4] = np.minimum(values[4], most)
         moved_by[name] = values[2] * weight
         per_camera[name] = values * weight
         total += values * weight
@@ -956,6 +965,10 @@ def describe_layer_shift(shift: LayerShift) -> str:
     elif not (_confirms(shift, 0.0, SHIFT_CONFIRMED, SHIFT_CONFIRMED_ONE_VIEW) or twice) \
             and _confirms_grown_in(shift, 0.0):
         twice = ", new since the check before the previous one"
+    # (named: the cameras with a share of the evidence, as for viewpoints; one that shows the move but decides
+    # next to none of its pixels confirms nothing)
+    named = [name for name in shift.cameras
+             if shift.moved_by.get(name, 0.0) >= VIEWPOINT_MIN_SHARE * shift.moved] or list(shift.cameras)
     return (f"the newest layers sit {shift.magnitude_mm:.1f} mm sideways on the layers below "
-            f"(X {dx:+.1f} mm, Y {dy:+.1f} mm), confirmed by {', '.join(sorted(shift.cameras))}"
+            f"(X {dx:+.1f} mm, Y {dy:+.1f} mm), confirmed by {', '.join(sorted(named))}"
             f" ({share}{twice}): layer shift?")
