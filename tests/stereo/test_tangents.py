@@ -207,3 +207,19 @@ def test_a_brim_on_the_bed_beside_a_low_part_does_not_read_as_width():
     tall = box_mesh(part_lo, [part_hi[0], part_hi[1], 30.0])
     tall_with_brim = render_silhouette(tall, camera) | render_silhouette(brim, camera)
     assert change(tall_with_brim, flat_zone, top=30.0, model=tall).width_change_mm == pytest.approx(0.0, abs=0.4)
+
+
+@pytest.mark.parametrize("true_top", [0.6, 2.5])
+def test_an_edge_no_higher_than_the_lowest_height_considered_is_no_height(pair, true_top):
+    """Only the first layers seen while the G-code says 14 mm (filament the bed's colour, the brim alone standing out):
+    every column's edge lies at or below the lowest height the fit considers (1 mm), which bounds the height but does
+    not measure it; the pair paused a normal print on such a "1.0 mm". An edge above it is still measured."""
+    left, right, backgrounds = pair
+    sections = Sections(box_mesh(LO, HI))
+    for camera, background in zip((left, right), backgrounds):
+        mask, diff = _observed(camera, background, *_box(true_top))
+        result = plane_height(camera, mask, diff, sections, 14.0, 14.0 - 1e-3)
+        if true_top < 1.0:
+            assert result.height_mm is None and "not seen above" in result.reason, (camera.name, result)
+        else:
+            assert result.height_mm == pytest.approx(true_top, abs=0.4), (camera.name, result)

@@ -409,7 +409,9 @@ class PairSizeCheck:
         else:
             # (Tried: the outline's top as a fallback, as before; it found one runout a check earlier
             # on one set, at 6 % median error: not kept -- abstaining beats a weak height.)
-            notes.append("height not measured: the upper edge does not fit the model's in both views")
+            why = "; ".join(f"{cam.name}: {p.reason}" for (cam, _, _), p in zip(views, planes)
+                            if p.height_mm is None and p.reason)
+            notes.append("height not measured: " + (why or "the upper edge does not fit the model's in both views"))
         # A low top (a print that stopped) counts only when the part is well seen at its own top: its
         # sides there where the model's are (an unseen side eats into the silhouette's top as well as its
         # sides). (Tried as a second corroboration: the outline's top by silhouette-edge stereo, which

@@ -221,6 +221,12 @@ def plane_height(camera: Camera, mask: np.ndarray, diff: np.ndarray | None, sect
     # Columns beyond the heights considered count at the range's ends (the mask is limited there).
     found = np.clip(found, heights[0], heights[-1])
     median = float(np.median(found))
+    if median <= heights[0]:
+        # most columns' edge stands at or below the lowest height considered: a bound, not a height. The part is
+        # not seen above its first layers there (filament the bed's colour on blue tape: both views read 1.0 mm
+        # of a 9-mm part, only its brim seen, and the pair paused the print before any failure)
+        return PlaneHeight(None, int(len(found)), np.nan, "the silhouette's upper edge stands no higher than the "
+                           f"lowest height considered ({heights[0]:.1f} mm): the part is not seen above it")
     return PlaneHeight(median, int(len(found)), float(np.median(np.abs(found - median))), residual_px=residual)
 
 
