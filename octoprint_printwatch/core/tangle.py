@@ -25,7 +25,7 @@ any frame size and camera distance.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable, Collection, Mapping
+from typing import Callable, Collection, Mapping, Sequence
 
 import cv2
 import numpy as np
@@ -313,14 +313,21 @@ def viewpoints(directions: Mapping[str, float | None]) -> int:
 def witnessed_by_another(camera: str, with_foot: Mapping[str, float | None]) -> bool:
     """Another view that measured new material (mm^2, the bed-marks zone's blobs included) sees at least
     ``SURROUNDING_WITNESS_MM2`` of it, or no other view measured any (a one-camera rig, a first check)."""
-    others = [a for cam, a in with_foot.items() if cam != camera and a is not None]
+    return seen_by_the_others((camera,), with_foot)
+
+
+def seen_by_the_others(cameras: Collection[str], with_foot: Mapping[str, float | None]) -> bool:
+    """A view other than ``cameras`` that measured new material (mm^2, the bed-marks zone's blobs included) sees at
+    least ``SURROUNDING_WITNESS_MM2`` of it, or no other view measured any."""
+    others = [a for cam, a in with_foot.items() if cam not in cameras and a is not None]
     return not others or max(others) >= SURROUNDING_WITNESS_MM2
 
 
 def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = TWO_VIEWS_MM2,
                    one_view_mm2: float = ONE_VIEW_MM2, with_foot: Mapping[str, float | None] | None = None,
                    directions: Mapping[str, float | None] | None = None,
-                   rise_pct: float | None = None, surrounding: Collection[str] = ()) -> str | None:
+                   rise_pct: float | None = None, surrounding: Collection[str] = (),
+                   pairs: Sequence[Sequence[str]] = ()) -> str | None:
     """The reason to pause for loose material piling up around the part, or None.
 
     ``areas`` maps every usable camera to its :attr:`NewMaterial.area_mm2` (None: not measured). A tangle
@@ -353,6 +360,13 @@ def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = 
     every side are on the sides the other views see too, so where another view measured new material it must
     see some (:func:`witnessed_by_another`): a skirt or brim line drawn into one view's mask at one check (its
     contrast near that view's threshold) also lies all around the part, and is that view's alone.
+
+    ``pairs``: stereo pairs ([left, right] names). Both cameras of a pair each seeing ``one_view_mm2`` (the zone's
+    blobs included), as much as a lone camera must see, count as two sides where no view outside the pair that
+    measured new material sees none (:data:`SURROUNDING_WITNESS_MM2`): loops spreading over the bed around the foot
+    of a part seen small and from one place (cross-check seed 28 ``050_spaghetti``: 44 and 58 mm² at the onset
+    check, caught three checks later by the stall), while the most a pair's views saw together on a normal print
+    of the development seeds was under 10 mm² each.
     """
     seen = {cam: a for cam, a in areas.items() if a is not None and a >= two_views_mm2}
     slowed = ""
@@ -364,8 +378,12 @@ def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = 
         measured = {**areas, **(with_foot or {})}
         around = sorted(cam for cam, a in seen.items() if cam in surrounding and a >= one_view_mm2
                         and witnessed_by_another(cam, measured))
+        paired = [pair for pair in pairs if all(cam in seen and seen[cam] >= one_view_mm2 for cam in pair)
+                  and seen_by_the_others(pair, measured)]
         if around:
             slowed = f" on more than half the circle around the part in {', '.join(around)}"
+        elif paired:
+            slowed = f" in both views of {' and '.join('+'.join(pair) for pair in paired)}"
         elif viewpoints({cam: (directions or {}).get(cam) for cam in seen}) < 2:
             if rise_pct is None or rise_pct >= SLOWED_RISE_PCT:
                 return None

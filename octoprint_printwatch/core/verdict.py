@@ -901,7 +901,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
                             # for the outline to show them rise, so a normal part reads 0 % there)
                             rise_pct=rise_pct,
                             surrounding={cam for cam, r in seen_loose.items()
-                                         if r.new_outside is not None and r.new_outside.surrounds_part})
+                                         if r.new_outside is not None and r.new_outside.surrounds_part},
+                            pairs=[pair for pair in pairs if all(cam in seen_loose for cam in pair)])
     if tangle is not None:
         fail_reasons.append(tangle)
         shape_fail = True
