@@ -211,6 +211,11 @@ class LayerShift:
     # every camera it shows to moves the band back to where its own earlier passing checks laid the outline
     # (see onto_earlier_places): the outline walked off the part, the layers did not move
     onto_earlier_places: bool = False
+    # the best bed shift lies on the search grid's edge (estimate_layer_shift's max_mm along X or Y): the evidence
+    # rises towards the edge, so the move it fits best lies beyond the search, if anywhere
+    at_search_edge: bool = False
+    # read at the print's first check (with_history: no check before it), whose band is the whole part
+    at_first_check: bool = False
 
     @property
     def score(self) -> float:
@@ -448,6 +453,7 @@ def estimate_layer_shift(views: Mapping[str, BandShift], *, max_mm: float = 8.0,
         found = _pooled(views, grid, vertical=False, refuted=refuted)
     if found is not None:
         found.opposite = _pooled(views, -found.shift_mm.reshape(1, 2), vertical=found.vertical, refuted=refuted)
+        found.at_search_edge = bool(np.max(np.abs(found.shift_mm)) >= max_mm - 0.5 * step_mm)
     return found
 
 
@@ -697,6 +703,7 @@ def with_history(shift: LayerShift | None,
         return None
     shift.before = []
     shift.back_to_first = False
+    shift.at_first_check = not history
     for tested, views in reversed(list(history[-4:])):
         if not tested:
             shift.back_to_first = True
@@ -915,7 +922,18 @@ def confirms_layer_shift(shift: LayerShift, min_mm: float) -> bool:
     """
     return ((_confirms(shift, min_mm, SHIFT_CONFIRMED, SHIFT_CONFIRMED_ONE_VIEW) or _confirms_new(shift, min_mm)
              or persists(shift, min_mm) or _confirms_grown_in(shift, min_mm))
-            and not was_there_before(shift) and not there_since_first_check(shift) and not shift.onto_earlier_places)
+            and not was_there_before(shift) and not there_since_first_check(shift) and not shift.onto_earlier_places
+            and not beyond_the_search_at_the_first_check(shift))
+
+
+def beyond_the_search_at_the_first_check(shift: LayerShift) -> bool:
+    """Whether the shift was read at the print's first check and lies on the search grid's edge: the first check's
+    band is the whole part, so nothing shows its layers moved on layers below, and a best fit pressed against the
+    8-mm edge is an outline laid far off the part (a view missing much of a part the bed's colour, a brim or skirt
+    beside it), not a move read. Three development recordings paused so before any failure, one of them a normal
+    print (cross-check seeds 28 ``003_normal``, 32 ``053_detach``, 36 ``025_detach``: 8-10 mm, one view); a part
+    knocked off before the first check shows at the next one as displaced or missing."""
+    return shift.at_first_check and shift.at_search_edge
 
 
 #: A camera's image shift of the band lands on one of its earlier places when within this many px (each axis) of it
