@@ -362,8 +362,8 @@ def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = 
     contrast near that view's threshold) also lies all around the part, and is that view's alone.
 
     ``pairs``: stereo pairs ([left, right] names). Both cameras of a pair each seeing ``one_view_mm2`` (the zone's
-    blobs included), as much as a lone camera must see, count as two sides where no view outside the pair that
-    measured new material sees none (:data:`SURROUNDING_WITNESS_MM2`): loops spreading over the bed around the foot
+    blobs included), as much as a lone camera must see, count as two sides, unless a view outside the pair measured
+    new material and saw under :data:`SURROUNDING_WITNESS_MM2` of it: loops spreading over the bed around the foot
     of a part seen small and from one place (cross-check seed 28 ``050_spaghetti``: 44 and 58 mm² at the onset
     check, caught three checks later by the stall), while the most a pair's views saw together on a normal print
     of the development seeds was under 10 mm² each.
