@@ -193,8 +193,19 @@ def unseen_by_the_other_views(result: ShapeResult, usable: Mapping[str, ShapeRes
         reading = rise_since_previous_check(r)
         return not r.relit and reading is not None and reading >= VISIBLY_RISING_PCT
 
-    return (result.moved_px is None and result.extra_pct >= MOSTLY_EXTRA_RATIO * result.missing_pct
-            and rising(result) and any(rising(r) for r in others))
+    if result.moved_px is not None or result.extra_pct < MOSTLY_EXTRA_RATIO * result.missing_pct:
+        return False
+    if result.first_look:
+        # (a first look has no rise to read: there, two views that see the part whole where it belongs, nothing
+        # extra and under a third of their threshold missing, stand in for the rise; a part knocked off or tangled
+        # before the first check misses or spills in them too)
+        return sum(r.missing_pct < r.threshold / 3.0 for r in witnesses) >= FIRST_LOOK_WITNESSES
+    return rising(result) and any(rising(r) for r in others)
+
+
+#: Views that see the part whole where it belongs and nothing extra that set a first look's decisive extra material
+#: aside (unseen_by_the_other_views: at a first look no view reads the rise)
+FIRST_LOOK_WITNESSES = 2
 
 
 #: A coarse growth reading counts in decide only from a view that read the part rising this much (%) at its
