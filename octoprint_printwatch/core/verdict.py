@@ -163,7 +163,9 @@ def unseen_by_the_other_views(result: ShapeResult, usable: Mapping[str, ShapeRes
     is within its threshold, or when it is decisive (four times the threshold, or with missing material) but
     ``MOSTLY_EXTRA_RATIO`` times the missing material, the part not found whole elsewhere, while this view, not relit,
     and another view not relit read the part rising as the model says since their previous check
-    (:func:`rise_since_previous_check`: fine, or to the pixel).
+    (:func:`rise_since_previous_check`: fine, or to the pixel); at this view's first look, which has no rise to read,
+    while :data:`FIRST_LOOK_WITNESSES` of the other views miss under a third of their threshold (the part whole where
+    it belongs).
 
     Material standing beside the part stands on the bed, where other cameras look too: a strand or blob shows some
     extra in a second view, and a part that detached or spills strands does not keep rising in the view that sees
