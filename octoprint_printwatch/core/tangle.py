@@ -310,15 +310,10 @@ def viewpoints(directions: Mapping[str, float | None]) -> int:
     return count_viewpoints(known, period=2.0 * np.pi) + int(len(known) < len(directions))
 
 
-def witnessed_by_another(camera: str, with_foot: Mapping[str, float | None]) -> bool:
-    """Another view that measured new material (mm^2, the bed-marks zone's blobs included) sees at least
-    ``SURROUNDING_WITNESS_MM2`` of it, or no other view measured any (a one-camera rig, a first check)."""
-    return seen_by_the_others((camera,), with_foot)
-
-
-def seen_by_the_others(cameras: Collection[str], with_foot: Mapping[str, float | None]) -> bool:
-    """A view other than ``cameras`` that measured new material (mm^2, the bed-marks zone's blobs included) sees at
-    least ``SURROUNDING_WITNESS_MM2`` of it, or no other view measured any."""
+def witnessed_by_another(cameras: Collection[str], with_foot: Mapping[str, float | None]) -> bool:
+    """A view other than ``cameras`` (one view, or the two of a stereo pair) that measured new material (mm^2, the
+    bed-marks zone's blobs included) sees at least ``SURROUNDING_WITNESS_MM2`` of it, or no other view measured any
+    (a one-camera rig, a first check)."""
     others = [a for cam, a in with_foot.items() if cam not in cameras and a is not None]
     return not others or max(others) >= SURROUNDING_WITNESS_MM2
 
@@ -377,9 +372,9 @@ def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = 
         # (as much as a lone camera must see: a brim of the part's colour, new in one view, also lies around it)
         measured = {**areas, **(with_foot or {})}
         around = sorted(cam for cam, a in seen.items() if cam in surrounding and a >= one_view_mm2
-                        and witnessed_by_another(cam, measured))
+                        and witnessed_by_another((cam,), measured))
         paired = [pair for pair in pairs if all(cam in seen and seen[cam] >= one_view_mm2 for cam in pair)
-                  and seen_by_the_others(pair, measured)]
+                  and witnessed_by_another(pair, measured)]
         if around:
             slowed = f" on more than half the circle around the part in {', '.join(around)}"
         elif paired:

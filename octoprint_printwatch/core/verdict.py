@@ -155,6 +155,11 @@ def missed_as_much_before(result: ShapeResult, most_missing_before: Mapping[str,
     return before is not None and result.missing_pct - before < result.threshold / 2.0
 
 
+#: Views that see the part whole where it belongs and nothing extra that set a first look's decisive extra material
+#: aside (unseen_by_the_other_views: at a first look no view reads the rise)
+FIRST_LOOK_WITNESSES = 2
+
+
 def unseen_by_the_other_views(result: ShapeResult, usable: Mapping[str, ShapeResult]) -> bool:
     """True when ``result`` fails on extra material (more than half its missing material) that every other ``usable``
     view not read against a relit background (at least one) does not see at all (:func:`sees_nothing_extra`) and none
@@ -203,11 +208,6 @@ def unseen_by_the_other_views(result: ShapeResult, usable: Mapping[str, ShapeRes
         # before the first check misses or spills in them too)
         return sum(r.missing_pct < r.threshold / 3.0 for r in witnesses) >= FIRST_LOOK_WITNESSES
     return rising(result) and any(rising(r) for r in others)
-
-
-#: Views that see the part whole where it belongs and nothing extra that set a first look's decisive extra material
-#: aside (unseen_by_the_other_views: at a first look no view reads the rise)
-FIRST_LOOK_WITNESSES = 2
 
 
 #: A coarse growth reading counts in decide only from a view that read the part rising this much (%) at its

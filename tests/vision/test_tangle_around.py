@@ -86,7 +86,7 @@ def test_a_view_surrounded_alone_while_the_others_see_nothing_new_is_no_tangle()
     # part, 35-116 mm² at the foot over 225°, while the other views measured no new material at all
     pair = {"a": 0.0, "b": np.radians(8.0)}
     alone = {"a": 4 * ONE_VIEW_MM2, "b": 0.0}
-    assert not witnessed_by_another("a", alone)
+    assert not witnessed_by_another(("a",), alone)
     assert loose_material({"a": 0.0, "b": 0.0}, with_foot=alone, directions=pair, rise_pct=100.0,
                           surrounding={"a"}) is None
     # another view seeing a strand's root of it corroborates: loops on every side are seen from other sides too
@@ -97,7 +97,7 @@ def test_a_view_surrounded_alone_while_the_others_see_nothing_new_is_no_tangle()
     assert loose_material({"a": 0.0, "b": 0.0}, with_foot={"a": 66.0, "b": 60.0}, directions=pair,
                           rise_pct=100.0, surrounding={"a", "b"}) is not None
     # no other view measured new material (a one-camera rig, or the others' first look): nothing to ask
-    assert witnessed_by_another("a", {"a": 80.0, "b": None})
+    assert witnessed_by_another(("a",), {"a": 80.0, "b": None})
     assert loose_material({"a": 0.0, "b": None}, with_foot={"a": 80.0}, directions=pair, rise_pct=100.0,
                           surrounding={"a"}) is not None
     # the other view's silence does not hide a slowed part: one view of strands still pauses a part that stopped
