@@ -23,7 +23,7 @@ import numpy as np
 from .camera import Camera
 from .errors import PrintWatchError
 from .settings import DetectionSettings
-from .alignment import near_any
+from .alignment import align_candidates, near_any
 from .growth import GROWTH_SPAN_CHECKS
 from .layer_shift import LayerShift, band_reads_shifted
 from .masks import dilate, shift_mask
@@ -958,8 +958,10 @@ class CheckRunner:
         regions = args["regions"]
         # (args["measure_growth"]: its last look is the previous check's, whose model outline is known)
         if (state.frozen or result.first_look or not args["measure_growth"] or state.previous_mask_at is None
-                or _silhouette_rows(regions.silhouette) < 2 * regions.max_shift_px
                 or not _still_in_place(result.observed_mask, args.get("last_observed"))):
+            return False
+        tall = _silhouette_rows(regions.silhouette) >= 2 * regions.max_shift_px
+        if not (tall or _anchor_off_the_overlap(result.observed_mask, regions, state.anchor, args["max_drift"])):
             return False
         refit = check_shape(**dict(args, anchor=None, max_drift=2))
         z_then, placed_then = state.previous_mask_at
@@ -1117,6 +1119,18 @@ def _still_in_place(observed: np.ndarray | None, before: np.ndarray | None, shar
     if observed is None or before is None or before.shape != observed.shape or not before.any():
         return False
     return np.count_nonzero(observed & before) >= share * np.count_nonzero(before)
+
+
+def _anchor_off_the_overlap(observed: np.ndarray | None, regions: ExpectedRegions, anchor: tuple[int, int] | None,
+                            max_drift: int) -> bool:
+    """Whether the overlap of the expected silhouette on ``observed`` ((h, w) bool) rules ``anchor`` out: every shift it
+    cannot tell from the best (:func:`core.alignment.align_candidates`, within the bound) lies more than ``max_drift`` px
+    (per axis) from the anchor. A short look cannot tell where along a brim of the part's colour the outline belongs
+    (ties spanning 10-20 px there), but one whose ties all lie away from the anchor shows the anchor wrong."""
+    if observed is None or anchor is None:
+        return False
+    _, ties = align_candidates(observed, np.asarray(regions.silhouette, bool), int(regions.max_shift_px))
+    return bool(len(ties)) and not near_any(anchor, ties, max_drift)
 
 
 def _covered_share(observed: np.ndarray, silhouette: np.ndarray, shift: tuple[int, int], tolerance_px: float) -> float:
