@@ -46,6 +46,11 @@ TEXTURE_JUMP = 1.5
 #: rose 50-79 %, one band's texture changed by 1.7x, the rest by at most 1.41x; after a failure's onset, 2-8x there.
 TEXTURE_JUMP_STRONG = 2.0
 PART_SLOWED_SOMEWHAT_PCT = 80.0
+#: A view's band is compared with the smoothest of its readings at this many checks before (since it was last
+#: unusable; never its first look): strands draped over a part first show as texture while the top still rises, and
+#: the top slows a check later (thirty-first session: 0 of the development seeds' checks before an onset or on a
+#: normal print read so, 12 first catches came a check or more sooner).
+TEXTURE_MEMORY_CHECKS = 2
 #: Bands smoother than this (grey levels of mean gradient, the texture cue's noise floor in shape_check) count as
 #: this smooth: ratios of smaller readings are noise
 SMOOTH_TEXTURE = 3.0
@@ -82,7 +87,7 @@ def region_texture(gradient: np.ndarray | None, region: np.ndarray) -> float | N
 
 
 def texture_jump_for(rise_pct: float | None) -> float | None:
-    """How many times as textured as at its previous check a view's newest band must look to show strands or the
+    """How many times as textured as at its checks before a view's newest band must look to show strands or the
     bed on a part that rose ``rise_pct`` (% of the expected; None: no reading): :data:`TEXTURE_JUMP` under
     SLOWED_RISE_PCT, :data:`TEXTURE_JUMP_STRONG` under :data:`PART_SLOWED_SOMEWHAT_PCT`, else None (a part
     rising as expected: a changed look is the view's artefact)."""
@@ -93,9 +98,9 @@ def texture_jump_for(rise_pct: float | None) -> float | None:
 
 def textured_views(texture: Mapping[str, float | None], before: Mapping[str, float],
                    jump: float = TEXTURE_JUMP) -> dict[str, float]:
-    """The views whose newest band is ``jump`` times as textured as at their previous check, with that ratio:
-    ``texture`` and ``before`` map cameras to :attr:`ShapeResult.band_texture` now and at the previous check
-    (a camera missing from ``before`` has no such reading: not counted)."""
+    """The views whose newest band is ``jump`` times as textured as at their checks before, with that ratio:
+    ``texture`` and ``before`` map cameras to :attr:`ShapeResult.band_texture` now and the smoothest of their readings
+    at the checks before (a camera missing from ``before`` has no such reading: not counted)."""
     ratios = {cam: t / max(before[cam], SMOOTH_TEXTURE) for cam, t in texture.items()
               if t is not None and before.get(cam) is not None}
     return {cam: ratio for cam, ratio in ratios.items() if ratio >= jump}

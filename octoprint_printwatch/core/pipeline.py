@@ -28,7 +28,7 @@ from .growth import GROWTH_SPAN_CHECKS
 from .layer_shift import LayerShift, band_reads_shifted
 from .masks import dilate, shift_mask
 from .shape_check import ExpectedRegions, ShapeResult, check_shape, not_decisive_where_it_stood
-from .nest import SOLID_MIN_COVERAGE, STALL_READ_BELOW_GROWTH_PCT
+from .nest import SOLID_MIN_COVERAGE, STALL_READ_BELOW_GROWTH_PCT, TEXTURE_MEMORY_CHECKS
 from .verdict import (RISE_HELD_READINGS, VISIBLY_RISING_PCT, band_shifts_of, decide, finest_reading, held_rise,
                       layer_shift_of, lowest_missing_while_rising, missing_since_rise, rise_since_previous_check,
                       without_views_never_seen_whole)
@@ -513,9 +513,10 @@ class CameraState:
     most_missing: float | None = None
     #: the highest share of its newest band covered by the part's material so far (core/nest.py)
     band_coverage: float | None = None
-    #: its newest band's texture at its previous check (ShapeResult.band_texture; None: not usable there, its
-    #: first look, whose band is the whole part, or no band figures): decide's textured-band rule
-    last_band_texture: float | None = None
+    #: its newest band's texture at its last TEXTURE_MEMORY_CHECKS checks since it was last unusable, oldest first
+    #: (ShapeResult.band_texture; None: its first look, whose band is the whole part, or no band figures): decide's
+    #: textured-band rules compare with the smoothest of them (smoothest_band_texture)
+    band_textures: tuple[float | None, ...] = ()
     #: (dx, dy) px: a calibration error larger than the stated one, learned once (_learn_calibration_offsets);
     #: its alignment bound is widened to reach it
     calibration_offset: tuple[int, int] | None = None
@@ -628,8 +629,8 @@ class CheckRunner:
                           if state.last_missing is not None}
         missing_at_rise = {name: state.rise_missing for name, state in self.cameras.items()
                            if state.rise_missing is not None}
-        texture_before = {name: state.last_band_texture for name, state in self.cameras.items()
-                          if state.last_band_texture is not None}
+        texture_before = {name: texture for name, state in self.cameras.items()
+                          if (texture := smoothest_band_texture(state.band_textures)) is not None}
         while_rising = {name: state.missing_while_rising for name, state in self.cameras.items()
                         if state.missing_while_rising is not None}
         most_missing_before = {name: state.most_missing for name, state in self.cameras.items()
@@ -743,13 +744,14 @@ class CheckRunner:
                 state.last_extra = state.last_rise = state.last_missing = state.last_foreign = None
                 state.read_rise_last_check, state.rise_readings = False, ()
                 state.rise_missing, state.rise_quiet = None, 0
-                state.last_band_texture = None
+                state.band_textures = ()
                 state.missing_while_rising = None
                 state.most_missing = None
                 continue
             if verdict == "ok":   # (a check that failed is no healthy look: a part knocked over misses much)
                 state.most_missing = max(r.missing_pct, state.most_missing or 0.0)
-            state.last_band_texture = None if r.first_look else r.band_texture
+            texture = None if r.first_look else r.band_texture
+            state.band_textures = (*state.band_textures, texture)[-TEXTURE_MEMORY_CHECKS:]
             state.last_extra, state.last_missing, state.last_foreign = r.extra_pct, r.missing_pct, r.foreign_mask
             rise_before_this = state.last_rise
             reading = finest_reading(r)
@@ -1123,14 +1125,20 @@ def _still_in_place(observed: np.ndarray | None, before: np.ndarray | None, shar
 
 def _anchor_off_the_overlap(observed: np.ndarray | None, regions: ExpectedRegions, anchor: tuple[int, int] | None,
                             max_drift: int) -> bool:
-    """Whether the overlap of the expected silhouette on ``observed`` ((h, w) bool) rules ``anchor`` out: every shift it
-    cannot tell from the best (:func:`core.alignment.align_candidates`, within the bound) lies more than ``max_drift`` px
-    (per axis) from the anchor. A short look cannot tell where along a brim of the part's colour the outline belongs
+    """Whether the overlap of the expected silhouette on ``observed`` ((h, w) bool) rules ``anchor`` out: every shift
+    it cannot tell from the best (:func:`core.alignment.align_candidates`, within the bound) lies more than
+    ``max_drift`` px (per axis) from the anchor. A short look cannot tell where along a brim of the part's colour the outline belongs
     (ties spanning 10-20 px there), but one whose ties all lie away from the anchor shows the anchor wrong."""
     if observed is None or anchor is None:
         return False
     _, ties = align_candidates(observed, np.asarray(regions.silhouette, bool), int(regions.max_shift_px))
     return bool(len(ties)) and not near_any(anchor, ties, max_drift)
+
+
+def smoothest_band_texture(readings: Sequence[float | None]) -> float | None:
+    """The smoothest of a camera's band texture readings at its last checks (None where it has none)."""
+    known = [reading for reading in readings if reading is not None]
+    return min(known) if known else None
 
 
 def _covered_share(observed: np.ndarray, silhouette: np.ndarray, shift: tuple[int, int], tolerance_px: float) -> float:

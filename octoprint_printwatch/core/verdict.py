@@ -396,7 +396,7 @@ def stopped_and_textured(usable: Mapping[str, ShapeResult], settings: DetectionS
                          band_texture_before: Mapping[str, float] | None) -> dict[str, float]:
     """The views that stopped (a rise held at their previous readings, ``held_rise_before``, and none read now: their
     finest reading under ``min_growth_pct``) while their newest band turned :data:`TEXTURE_JUMP_STRONG` times as
-    textured as at their previous check (``band_texture_before``), with that ratio; none where the median of every
+    textured as at their checks before (``band_texture_before``), with that ratio; none where the median of every
     view's finest reading is :data:`PART_SLOWED_SOMEWHAT_PCT` or more. Strands piled over a part that stopped read
     in that view as both a stop and a changed band, where no median of one-check readings exists to slow (views
     seen small read the rise only over a span or to the pixel; a span reaching back before the stop still reads
@@ -777,10 +777,11 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       standing in: :func:`rise_for_loose_material`; not where a top surface closes)
       (:func:`core.tangle.loose_material`);
     * or when, with the part's outline rising under half the expected height (the same figure, not where a top
-      surface closes), a view's newest band looks 1.5 times as textured as at its previous check
-      (``ShapeResult.band_texture``; ``band_texture_before``: each camera's reading at its previous check, not a
-      first look; :func:`core.nest.textured_views`), or twice as textured (TEXTURE_JUMP_STRONG) with the part rising
-      under 80 % (PART_SLOWED_SOMEWHAT_PCT): strands piled over a part that slowed, or the bed where it should be;
+      surface closes), a view's newest band looks 1.5 times as textured as at its checks before
+      (``ShapeResult.band_texture``; ``band_texture_before``: the smoothest of each camera's readings at its last
+      ``TEXTURE_MEMORY_CHECKS`` checks, not a first look; :func:`core.nest.textured_views`), or twice as textured
+      (TEXTURE_JUMP_STRONG) with the part rising under 80 % (PART_SLOWED_SOMEWHAT_PCT): strands piled over a part
+      that slowed, or the bed where it should be;
       or, not where a top surface closes, when a view that held a rise (``held_rise_before``) and reads none now (its
       finest reading) shows its band twice as textured, while the median of every view's finest reading is under
       80 % (:func:`stopped_and_textured`: its own stop is the second witness where no median of one-check readings
@@ -928,7 +929,7 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     textured = ({} if jump is None else
                 textured_views({cam: r.band_texture for cam, r in usable.items()}, band_texture_before or {}, jump))
     if textured:
-        fail_reasons.extend(f"{cam}: the newest layers look {ratio:.1f} times as textured as at the previous check "
+        fail_reasons.extend(f"{cam}: the newest layers look {ratio:.1f} times as textured as at the checks before "
                             f"while the part rose {rise_pct:.0f}% of the expected height: strands piled over the "
                             f"part, or the bed where it should be?" for cam, ratio in sorted(textured.items()))
         shape_fail = True
@@ -938,7 +939,7 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
                         stopped_and_textured(usable, settings, held_rise_before=held_rise_before,
                                              band_texture_before=band_texture_before))
     if stopped_textured:
-        fail_reasons.extend(f"{cam}: the newest layers look {ratio:.1f} times as textured as at the previous check "
+        fail_reasons.extend(f"{cam}: the newest layers look {ratio:.1f} times as textured as at the checks before "
                             f"where the part stopped rising in this view: strands piled over the part, or the bed "
                             f"where it should be?" for cam, ratio in sorted(stopped_textured.items()))
         shape_fail = True
