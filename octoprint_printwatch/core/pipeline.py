@@ -938,16 +938,19 @@ class CheckRunner:
 
     def _anchor_again_once_tall(self, name: str, z: float, result: ShapeResult, shape: dict[str, ShapeResult],
                                 shape_inputs: dict[str, dict], errors: dict[str, float | None]) -> bool:
-        """A camera whose anchor only short looks laid, failing where the part now stands tall in its view: lay the
-        outline again, free of that anchor, when the part clearly fits elsewhere within the bound and its own
-        frames show it in place and grown there (updates ``shape``; True when it did).
+        """A camera whose anchor only short looks laid, failing where the part now stands tall in its view or where
+        the overlap rules the anchor out (:func:`_anchor_off_the_overlap`): lay the outline again, free of that
+        anchor, when the part clearly fits elsewhere within the bound and its own frames show it in place and grown
+        there (updates ``shape``; True when it did).
 
         A first look at a part a few millimetres tall on a brim of its colour, or a top on its shadow, fits the
         outline anywhere along the brim, and the anchor it leaves may sit 10-20 px off the part; while the part
         is short that still passes, and the anchor is held only once a tall look passes (``CameraState.frozen``).
         As the part rises out of the brim, its side beyond the misplaced outline reads as extra material and the
         bed inside it as missing, at every check, and no look passes to move the anchor. A tall look is
-        unambiguous: the part fits at one place, clearly (half the threshold and half the failing error to spare,
+        unambiguous, and so is a shorter one whose ties (the shifts the overlap cannot tell from its best) all lie
+        away from the anchor (cross-check seed 38 ``003_normal``: 64 rows, one short of twice the bound, ties 4 px
+        and more from it): the part fits at one place, clearly (half the threshold and half the failing error to spare,
         its newest band in place, not decisive), and the camera's frames tell a misplaced outline from a part
         that moved: the material seen at the previous check is still seen (a part that slid or was knocked off is
         not), the part grew there as the model says (a stopped or detached part does not), and the part as the
@@ -979,7 +982,8 @@ class CheckRunner:
         moved = _px_apart(refit.shift_px, state.anchor)
         state.shift_candidates = refit.shift_candidates
         self._adopt_place(name, z, refit, (
-            f"{name}: the outline its first, short looks laid {moved} px off the part; the part, tall now, fits at "
+            f"{name}: the outline its first, short looks laid {moved} px off the part; the part, "
+            f"{'tall now' if tall else 'clear of that outline now'}, fits at "
             f"({refit.shift_px[0]:+d}, {refit.shift_px[1]:+d}) px, in place since the previous check and grown there "
             f"({rise:.0f} % of the expected rise): its checks use that place from now on"), shape, errors)
         return True
