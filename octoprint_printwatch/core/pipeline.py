@@ -31,7 +31,7 @@ from .shape_check import ExpectedRegions, ShapeResult, check_shape, not_decisive
 from .nest import SOLID_MIN_COVERAGE, STALL_READ_BELOW_GROWTH_PCT, TEXTURE_MEMORY_CHECKS
 from .verdict import (RISE_HELD_READINGS, VISIBLY_RISING_PCT, band_shifts_of, decide, finest_reading, held_rise,
                       layer_shift_of, lowest_missing_while_rising, missing_since_rise, rise_since_previous_check,
-                      without_views_never_seen_whole)
+                      visibly_rising, without_views_never_seen_whole)
 
 VERDICTS = ("ok", "fail", "unknown")
 
@@ -950,7 +950,8 @@ class CheckRunner:
         bed inside it as missing, at every check, and no look passes to move the anchor. A tall look is
         unambiguous, and so is a shorter one whose ties (the shifts the overlap cannot tell from its best) all lie
         away from the anchor (cross-check seed 38 ``003_normal``: 64 rows, one short of twice the bound, ties 4 px
-        and more from it): the part fits at one place, clearly (half the threshold and half the failing error to spare,
+        and more from it) while the other views see the part rise (:func:`core.verdict.visibly_rising`): the part fits
+        at one place, clearly (half the threshold and half the failing error to spare,
         its newest band in place, not decisive), and the camera's frames tell a misplaced outline from a part
         that moved: the material seen at the previous check is still seen (a part that slid or was knocked off is
         not), the part grew there as the model says (a stopped or detached part does not), and the part as the
@@ -966,7 +967,11 @@ class CheckRunner:
                 or not _still_in_place(result.observed_mask, args.get("last_observed"))):
             return False
         tall = _silhouette_rows(regions.silhouette) >= 2 * regions.max_shift_px
-        if not (tall or _anchor_off_the_overlap(result.observed_mask, regions, state.anchor, args["max_drift"])):
+        # a shorter look only while the other views see the part rise: strands piled on a part that slowed also fit
+        # the outline away from the anchor (cross-check seed 34 ``034_spaghetti``)
+        others = {other: r for other, r in shape.items() if other != name and r.usable}
+        if not (tall or (visibly_rising(others) and _anchor_off_the_overlap(result.observed_mask, regions,
+                                                                            state.anchor, args["max_drift"]))):
             return False
         refit = check_shape(**dict(args, anchor=None, max_drift=2))
         z_then, placed_then = state.previous_mask_at

@@ -9,6 +9,10 @@ right of the part, along the brim; at layer 75 (15 mm) the part, 64 rows tall in
 alignment's bound, read 48 % extra beside the outline and the print paused there and at the next check. Every shift
 the overlap cannot tell from the best lies 4 px or more from that anchor, and free of it the part fits with nothing
 missing or extra.
+
+Not while the other views see the part slow: strands piled on a part that stopped rising fit the outline away from
+the anchor as well (cross-check seed 34 ``034_spaghetti``: at layer 66, s0R's short look, free of its anchor, passed on
+the strands while s0L and s1 read 50 % and 21 % of the expected rise).
 """
 from __future__ import annotations
 
@@ -21,7 +25,9 @@ from octoprint_printwatch.core.shape_check import ExpectedRegions
 
 from .check_runs import run_checks
 
-RECORDING = Path(__file__).resolve().parents[1] / "data" / "recordings" / "ring_orange_kapton_short_anchor_pair"
+RECORDINGS = Path(__file__).resolve().parents[1] / "data" / "recordings"
+RECORDING = RECORDINGS / "ring_orange_kapton_short_anchor_pair"
+SLOWED = RECORDINGS / "star_spaghetti_short_look_pair"
 #: where the true camera puts the part in s0L's working frame, against its calibration (px)
 TRUE_OFFSET = (-1.7, 0.8)
 
@@ -52,6 +58,14 @@ def test_an_anchor_held_stays_and_the_print_pauses():
     def hold(state) -> None:
         state.frozen = True
     assert _run(hold)[-1].verdict == "fail"
+
+
+def test_strands_on_a_part_the_other_views_see_slow_are_not_taken_for_the_part():
+    results = run_checks(SLOWED)
+    assert [r.verdict for r in results] == ["ok", "ok", "fail"]
+    last = results[-1].shape["s0R"]
+    assert not last.passed
+    assert not any("first, short looks laid" in reason for reason in last.reasons)
 
 
 def _regions(silhouette: np.ndarray, max_shift: float) -> ExpectedRegions:
