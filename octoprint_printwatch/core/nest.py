@@ -48,8 +48,8 @@ TEXTURE_JUMP_STRONG = 2.0
 PART_SLOWED_SOMEWHAT_PCT = 80.0
 #: A view's band is compared with the smoothest of its readings at this many checks before (since it was last
 #: unusable; never its first look): strands draped over a part first show as texture while the top still rises, and
-#: the top slows a check later (thirty-first session: 0 of the development seeds' checks before an onset or on a
-#: normal print read so, 12 first catches came a check or more sooner).
+#: the top slows a check later (thirty-first session, development seeds 20-39: no check before an onset or on a
+#: normal print newly paused, 7 first catches a check or two sooner).
 TEXTURE_MEMORY_CHECKS = 2
 #: Bands smoother than this (grey levels of mean gradient, the texture cue's noise floor in shape_check) count as
 #: this smooth: ratios of smaller readings are noise

@@ -874,7 +874,7 @@ class CheckRunner:
             if state.anchor is not None:
                 # it passed before (or learned already): an anchor only short looks laid may be laid again, else
                 # only an anchor pinned at the bound may move
-                if not self._anchor_again_once_tall(name, z, result, shape, shape_inputs, errors):
+                if not self._anchor_again_once_clear(name, z, result, shape, shape_inputs, errors):
                     self._learn_beyond_pinned_anchor(name, z, result, shape, shape_inputs, errors, in_place)
                 continue
             pending, state.pending_offset = state.pending_offset, None
@@ -936,7 +936,7 @@ class CheckRunner:
         if probe.palette is not None:
             state.palette = probe.palette
 
-    def _anchor_again_once_tall(self, name: str, z: float, result: ShapeResult, shape: dict[str, ShapeResult],
+    def _anchor_again_once_clear(self, name: str, z: float, result: ShapeResult, shape: dict[str, ShapeResult],
                                 shape_inputs: dict[str, dict], errors: dict[str, float | None]) -> bool:
         """A camera whose anchor only short looks laid, failing where the part now stands tall in its view or where
         the overlap rules the anchor out (:func:`_anchor_off_the_overlap`): lay the outline again, free of that
@@ -950,15 +950,16 @@ class CheckRunner:
         bed inside it as missing, at every check, and no look passes to move the anchor. A tall look is
         unambiguous, and so is a shorter one whose ties (the shifts the overlap cannot tell from its best) all lie
         away from the anchor (cross-check seed 38 ``003_normal``: 64 rows, one short of twice the bound, ties 4 px
-        and more from it) while the other views see the part rise (:func:`core.verdict.visibly_rising`): the part fits
-        at one place, clearly (half the threshold and half the failing error to spare,
-        its newest band in place, not decisive), and the camera's frames tell a misplaced outline from a part
-        that moved: the material seen at the previous check is still seen (a part that slid or was knocked off is
-        not), the part grew there as the model says (a stopped or detached part does not), and the part as the
-        camera's last passing check saw it covers the model's outline of then at the new place as well as where that
-        check laid it: an anchor that was wrong was wrong then too, while a part that moved or layers that shifted
-        since leave that look's part at the old place (an outline fitted on shifted newest layers leaves the
-        layers below beside it). Once per print: the new anchor is held (frozen)."""
+        and more from it) while the other views see the part rise (:func:`core.verdict.visibly_rising`; strands on
+        a part that slowed fit the outline away from the anchor too). The part must fit at one place, clearly (half
+        the threshold and half the failing error to spare, its newest band in place, not decisive), and the
+        camera's frames tell a misplaced outline from a part that moved: the material seen at the previous check is
+        still seen (a part that slid or was knocked off is not), the part grew there as the model says (a stopped or
+        detached part does not), and the part as the camera's last passing check saw it covers the model's outline
+        of then at the new place as well as where that check laid it: an anchor that was wrong was wrong then too,
+        while a part that moved or layers that shifted since leave that look's part at the old place (an outline
+        fitted on shifted newest layers leaves the layers below beside it). Once per print: the new anchor is held
+        (frozen)."""
         state = self.cameras[name]
         args = shape_inputs[name]
         regions = args["regions"]
@@ -967,8 +968,7 @@ class CheckRunner:
                 or not _still_in_place(result.observed_mask, args.get("last_observed"))):
             return False
         tall = _silhouette_rows(regions.silhouette) >= 2 * regions.max_shift_px
-        # a shorter look only while the other views see the part rise: strands piled on a part that slowed also fit
-        # the outline away from the anchor (cross-check seed 34 ``034_spaghetti``)
+        # (cross-check seed 34 ``034_spaghetti``: a short look on strands, the other views reading 50 % and 21 %)
         others = {other: r for other, r in shape.items() if other != name and r.usable}
         if not (tall or (visibly_rising(others) and _anchor_off_the_overlap(result.observed_mask, regions,
                                                                             state.anchor, args["max_drift"]))):
@@ -1136,8 +1136,8 @@ def _anchor_off_the_overlap(observed: np.ndarray | None, regions: ExpectedRegion
                             max_drift: int) -> bool:
     """Whether the overlap of the expected silhouette on ``observed`` ((h, w) bool) rules ``anchor`` out: every shift
     it cannot tell from the best (:func:`core.alignment.align_candidates`, within the bound) lies more than
-    ``max_drift`` px (per axis) from the anchor. A short look cannot tell where along a brim of the part's colour the outline belongs
-    (ties spanning 10-20 px there), but one whose ties all lie away from the anchor shows the anchor wrong."""
+    ``max_drift`` px (per axis) from the anchor. A short look cannot tell where along a brim of the part's colour the
+    outline belongs (ties spanning 10-20 px there), but one whose ties all lie away from the anchor shows it wrong."""
     if observed is None or anchor is None:
         return False
     _, ties = align_candidates(observed, np.asarray(regions.silhouette, bool), int(regions.max_shift_px))

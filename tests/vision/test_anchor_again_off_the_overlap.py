@@ -1,5 +1,5 @@
 """A camera whose anchor only short looks laid lays its outline again before the part stands tall in its view where the
-overlap of the model's outline on what it sees rules the anchor out (CheckRunner._anchor_again_once_tall,
+overlap of the model's outline on what it sees rules the anchor out (CheckRunner._anchor_again_once_clear,
 pipeline._anchor_off_the_overlap).
 
 What a user would notice: a normal print paused as "unexpected material (spaghetti, blob or moved part?)" and "the

@@ -1,5 +1,5 @@
 """A camera whose anchor only short looks laid lays its outline again, once, where the part now stands tall, fits
-clearly, stayed in place and grew (CheckRunner._anchor_again_once_tall).
+clearly, stayed in place and grew (CheckRunner._anchor_again_once_clear).
 
 What a user would notice: a normal print paused as "unexpected material (spaghetti, blob or moved part?)" and "the
 newest layers are displaced" by one camera for the rest of the print. Cross-check seed 36 ``007_normal`` (a red
