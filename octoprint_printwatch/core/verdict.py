@@ -391,6 +391,18 @@ def rise_for_loose_material(usable: Mapping[str, ShapeResult], growth: Sequence[
     return float(np.median(readings)) if enough_rise_readings(readings, usable) else None
 
 
+def rise_over_spans(usable: Mapping[str, ShapeResult]) -> float | None:
+    """The part's rise (% of the expected) over the views' spans of checks (``ShapeResult.span_growth_pct``) where
+    no view reads it at one check, finely or to the pixel: the median of the span readings (-15 % or more) of two or
+    more views, or the only usable view's; else None. A span reaches back to checks before whatever slowed the part,
+    so it reads more of the rise than the last check saw: under a limit, the last check's rise is under it too."""
+    if any(rise_since_previous_check(r) is not None for r in usable.values()):
+        return None
+    readings = [r.span_growth_pct for r in usable.values()
+                if r.span_growth_pct is not None and r.span_growth_pct >= SANK_BELOW_PCT]
+    return float(np.median(readings)) if enough_rise_readings(readings, usable) else None
+
+
 def stopped_and_textured(usable: Mapping[str, ShapeResult], settings: DetectionSettings, *,
                          held_rise_before: Mapping[str, float] | None,
                          band_texture_before: Mapping[str, float] | None) -> dict[str, float]:
@@ -925,13 +937,17 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     # strand brings its own highlight and shadow where the printed face was smooth (the bed seen where the part
     # should be is textured too); the slow rise is the second witness, as for one view of loose material
     # (a rise of 50-79 % only with a band changed markedly: a coarse rise reading is +-25 %)
-    jump = texture_jump_for(rise_pct)
+    # (where no view reads the rise at one check, their readings over a span of checks stand in: rise_over_spans)
+    texture_rise, over = rise_pct, ""
+    if texture_rise is None and not top_closing and (texture_rise := rise_over_spans(usable)) is not None:
+        over = " over the last checks"
+    jump = texture_jump_for(texture_rise)
     textured = ({} if jump is None else
                 textured_views({cam: r.band_texture for cam, r in usable.items()}, band_texture_before or {}, jump))
     if textured:
         fail_reasons.extend(f"{cam}: the newest layers look {ratio:.1f} times as textured as at the checks before "
-                            f"while the part rose {rise_pct:.0f}% of the expected height: strands piled over the "
-                            f"part, or the bed where it should be?" for cam, ratio in sorted(textured.items()))
+                            f"while the part rose {texture_rise:.0f}% of the expected height{over}: strands piled "
+                            f"over the part, or the bed where it should be?" for cam, ratio in sorted(textured.items()))
         shape_fail = True
     # ... and a view that read the part rise at its checks before and none now whose band turned so textured: its own
     # stop is the second witness where too few views read the rise since the previous check (stopped_and_textured)
