@@ -788,7 +788,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       or the only usable camera's own reading, where too few views read it finely each view's coarse reading
       standing in: :func:`rise_for_loose_material`; not where a top surface closes)
       (:func:`core.tangle.loose_material`);
-    * or when, with the part's outline rising under half the expected height (the same figure, not where a top
+    * or when, with the part's outline rising under half the expected height (the same figure, or where no view
+      reads the rise at one check their readings over a span of checks, :func:`rise_over_spans`; not where a top
       surface closes), a view's newest band looks 1.5 times as textured as at its checks before
       (``ShapeResult.band_texture``; ``band_texture_before``: the smoothest of each camera's readings at its last
       ``TEXTURE_MEMORY_CHECKS`` checks, not a first look; :func:`core.nest.textured_views`), or twice as textured
