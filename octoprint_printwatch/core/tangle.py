@@ -366,11 +366,11 @@ def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = 
     seen = {cam: a for cam, a in areas.items() if a is not None and a >= two_views_mm2}
     slowed = ""
     if not (len(seen) >= 2 or (len(areas) == 1 and any(a >= one_view_mm2 for a in seen.values()))):
-        seen = {cam: a for cam, a in {**areas, **(with_foot or {})}.items() if a is not None and a >= two_views_mm2}
+        measured = {**areas, **(with_foot or {})}
+        seen = {cam: a for cam, a in measured.items() if a is not None and a >= two_views_mm2}
         if not seen:
             return None
         # (as much as a lone camera must see: a brim of the part's colour, new in one view, also lies around it)
-        measured = {**areas, **(with_foot or {})}
         around = sorted(cam for cam, a in seen.items() if cam in surrounding and a >= one_view_mm2
                         and witnessed_by_another((cam,), measured))
         paired = [pair for pair in pairs if all(cam in seen and seen[cam] >= one_view_mm2 for cam in pair)

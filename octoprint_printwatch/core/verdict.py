@@ -939,9 +939,9 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     # should be is textured too); the slow rise is the second witness, as for one view of loose material
     # (a rise of 50-79 % only with a band changed markedly: a coarse rise reading is +-25 %)
     # (where no view reads the rise at one check, their readings over a span of checks stand in: rise_over_spans)
-    texture_rise, over = rise_pct, ""
-    if texture_rise is None and not top_closing and (texture_rise := rise_over_spans(usable)) is not None:
-        over = " over the last checks"
+    over_spans = None if rise_pct is not None or top_closing else rise_over_spans(usable)
+    texture_rise = rise_pct if over_spans is None else over_spans
+    over = "" if over_spans is None else " over the last checks"
     jump = texture_jump_for(texture_rise)
     textured = ({} if jump is None else
                 textured_views({cam: r.band_texture for cam, r in usable.items()}, band_texture_before or {}, jump))
