@@ -266,6 +266,11 @@ def held_a_rise(held_rise_before: Mapping[str, float] | None, camera: str) -> bo
 #: of rising.
 RISE_HELD_READINGS = 2
 
+#: A reading of the rise at this share of the expected or more is itself a pixel step, not a rise held: no part
+#: rises faster than its model, so a view reading half again the expected rise read its top late (a 0 at one check
+#: and 200 % at the next), and the reading before it belongs to the same measurement (held_rise).
+RISE_OVERSHOOT_PCT = 150.0
+
 
 #: A view reading at least this share of the expected rise (fine, over its span or coarse) saw the part rise as the
 #: model says: a stop that no view shows as missing material does not stand against it (decide).
@@ -293,14 +298,25 @@ def held_rise(readings: Sequence[float], read_at_previous: bool,
     A stop late in the interval before the previous check leaves that check reading part of the rise
     (``min_growth_pct`` to :data:`COARSE_ROSE_BEFORE_PCT`: the layers printed before the stop), the checks after it
     none; where the :data:`RISE_HELD_READINGS` readings before that partial one held a rise, the view held that rise
-    up to the stop (as ``missing_since_rise`` keeps its missing material through such a reading)."""
+    up to the stop (as ``missing_since_rise`` keeps its missing material through such a reading).
+
+    A reading of :data:`RISE_OVERSHOOT_PCT` or more among the last ones is a top read late, so the reading before them
+    joins the history (and a history too short for that holds nothing): a view whose readings run 0, 67, 200 % read
+    no steady rise before a 17 % (cross-check seed 43 ``013_normal``, a black L on glass whose stereo partner could
+    not tell it from the bed), while a stop after a steady rise is still one after a late reading (86, 100, 200 %,
+    then 14 %: seed 41 ``045_detach``)."""
     if not read_at_previous or len(readings) < RISE_HELD_READINGS:
         return None
     before_stop = readings[-RISE_HELD_READINGS - 1:-1]
     if (min_growth_pct <= readings[-1] < COARSE_ROSE_BEFORE_PCT and len(before_stop) == RISE_HELD_READINGS
             and min(before_stop) >= COARSE_ROSE_BEFORE_PCT):
         return float(min(before_stop))
-    return float(min(readings[-RISE_HELD_READINGS:]))
+    held = readings[-RISE_HELD_READINGS:]
+    if max(held) >= RISE_OVERSHOOT_PCT:
+        if len(readings) <= RISE_HELD_READINGS:
+            return None
+        held = readings[-RISE_HELD_READINGS - 1:]
+    return float(min(held))
 
 
 #: A view keeps its missing material from its last rising check (missing_since_rise) for at most this many
