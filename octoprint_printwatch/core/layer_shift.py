@@ -811,16 +811,8 @@ def _confirms_grown_in(shift: LayerShift, min_mm: float) -> bool:
     Only with the overhang on one side that a new shift needs (SHIFT_OVERHANG_SHARE, SHIFT_OPPOSITE_MAX): bed inside
     the outline alone is also a part a little narrower than the model, and the rest of the readings of the last
     four checks still rule out an offset there all along (:func:`was_there_before`)."""
-    return (len(shift.before) >= 2 and _read_not_there(shift.before[1]) and _read_clearly_absent(shift.before[1])
-            and _one_sided(shift) and _sticks_out(shift) and _confirms(shift, min_mm, SHIFT_CONFIRMED, SHIFT_CONFIRMED))
-
-
-def _read_clearly_absent(earlier: LayerShift | None) -> bool:
-    """Whether ``earlier`` read the shift under SHIFT_PARTLY_THERE of every pixel it changes: the check before a
-    shift's onset reads it clearly absent, while an outline's offset growing into view reads a third of it there
-    two checks before it passes three quarters (cross-check seed 43 ``012_normal``, one view: 0.08, 0.30, 0.62,
-    0.75; the development seeds' layer shifts caught this way read at most 0.21 there)."""
-    return earlier is not None and earlier.confirmed < SHIFT_PARTLY_THERE
+    return (len(shift.before) >= 2 and _read_not_there(shift.before[1]) and _one_sided(shift) and _sticks_out(shift)
+            and _confirms(shift, min_mm, SHIFT_CONFIRMED, SHIFT_CONFIRMED))
 
 
 def persists(shift: LayerShift, min_mm: float) -> bool:

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from functools import cached_property
+from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -235,14 +236,30 @@ def reaching_in_from_above(objects: np.ndarray, search: np.ndarray, expected: np
     ``outline`` ((h, w) bool, the part's outline zone) or None: a blob kept only for reaching the foot is
     looked at again taken apart from a ring around the outline (apart_from_ring): a piece of it that reaches
     in from above on its own and meets the outline at a point (POINT_CONTACT_SHARE) hangs beside the part in
-    this view, joined to its foot by nothing but the part's rim.
+    this view, joined to its foot by nothing but the part's rim. So is a blob that holds as much material where
+    ``before``'s objects hung as half of them (the object followed, joined to the part's top by its shadow and the
+    rim's fringe as the part rises towards it in the picture: cross-check seed 43 ``012_normal``); a piece of it
+    followed there (its material apart from the outline) is foreign however long its contact with the ring.
     """
-    out, kept_at_foot = _reaching_in(objects, search, expected, material, before)
-    if outline is not None and kept_at_foot.any():
-        apart, ring = apart_from_ring(kept_at_foot, outline_ring(outline))
-        pieces, _ = _reaching_in(apart, search, expected, material, before)
-        out |= _touching_at_a_point(pieces, ring)
+    first = _reaching_in(objects, search, expected, material, before)
+    out = first.foreign
+    if outline is not None and (first.kept_at_foot.any() or first.holding.any()):
+        apart, ring = apart_from_ring(first.kept_at_foot | first.holding, outline_ring(outline))
+        pieces = _reaching_in(apart, search, expected, material, before)
+        # (a piece followed from the previous check keeps its material apart from the outline already: only weak
+        # pixels, its shadow or the rim's fringe, join it to the part, however long the contact)
+        out |= pieces.followed | _touching_at_a_point(pieces.foreign & first.kept_at_foot & ~pieces.followed, ring)
     return out
+
+
+class _Reach(NamedTuple):
+    """:func:`_reaching_in`'s answer, each (h, w) bool."""
+    foreign: np.ndarray        # the pixels of the blobs not the print's
+    kept_at_foot: np.ndarray   # of the blobs reaching in from above, those kept for reaching the part's foot
+    followed: np.ndarray       # of the foreign blobs, those followed from ``before``
+    # blobs not foreign that hold as much material where ``before``'s object hung as half that object: the object
+    # followed, joined to the part by weak pixels (its shadow, the rim's fringe)
+    holding: np.ndarray
 
 
 def _touching_at_a_point(pieces: np.ndarray, ring: np.ndarray) -> np.ndarray:
@@ -273,20 +290,18 @@ def _touching_at_a_point(pieces: np.ndarray, ring: np.ndarray) -> np.ndarray:
 
 
 def _reaching_in(objects: np.ndarray, search: np.ndarray, expected: np.ndarray, material: np.ndarray | None,
-                 before: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`reaching_in_from_above` on one grouping of the pixels into blobs -> (the foreign pixels, the
-    pixels of the blobs that reach in from above but were kept for reaching the part's foot)."""
-    out = np.zeros(objects.shape, bool)
-    kept = np.zeros(objects.shape, bool)
+                 before: np.ndarray | None) -> _Reach:
+    """:func:`reaching_in_from_above` on one grouping of the pixels into blobs."""
+    painted = _Reach(*(np.zeros(objects.shape, bool) for _ in range(4)))
     box = bounding_box(objects)
     if box is None:
-        return out, kept
+        return painted
     # (on the objects' box only: every blob lies in it, and the whole frame costs several times more)
     y0, y1, x0, x1 = box
     inner = (slice(y0, y1), slice(x0, x1))
     count, labels, area = components(objects[inner])
     if count <= 1:
-        return out, kept
+        return painted
     # (each column's top row of the search box, read on the objects' columns only)
     columns = search[:, x0:x1]
     ceiling = np.where(columns.any(axis=0), np.argmax(columns, axis=0), search.shape[0])
@@ -294,14 +309,14 @@ def _reaching_in(objects: np.ndarray, search: np.ndarray, expected: np.ndarray, 
     beyond = np.bincount(labels[~search[inner]], minlength=count)
     from_above = np.bincount(labels[above], minlength=count)
     foreign = (beyond >= 0.15 * np.maximum(area, 1)) & (from_above >= 0.05 * np.maximum(area, 1))
-    followed = np.zeros(count, bool)
+    followed, holding = np.zeros(count, bool), np.zeros(count, bool)
     if before is not None and before.any():
         held = objects[inner] if material is None else material[inner] & objects[inner]
-        there = held & dilate(before, FOREIGN_BEFORE_REACH_PX)[inner]
+        there = np.bincount(labels[held & dilate(before, FOREIGN_BEFORE_REACH_PX)[inner]], minlength=count)
         total = np.bincount(labels[held], minlength=count)
         near_part = np.bincount(labels[held & dilate(expected, FOREIGN_APART_PX)[inner]], minlength=count)
-        followed = ((total > 0) & (near_part == 0)
-                    & (np.bincount(labels[there], minlength=count) >= FOREIGN_BEFORE_SHARE * np.maximum(total, 1)))
+        followed = (total > 0) & (near_part == 0) & (there >= FOREIGN_BEFORE_SHARE * np.maximum(total, 1))
+        holding = ~followed & ~foreign & (there >= FOREIGN_BEFORE_SHARE * np.count_nonzero(before))
     rows = np.flatnonzero(expected.any(axis=1))
     at_foot = np.zeros(count, bool)
     if rows.size:
@@ -320,15 +335,13 @@ def _reaching_in(objects: np.ndarray, search: np.ndarray, expected: np.ndarray, 
             lowest = np.where(deepest >= 0, deepest, lowest)
         followed &= lowest < foot_zone
     foreign |= followed
-    foreign[0] = False
     at_foot &= ~foreign
-    at_foot[0] = False
-    # (painted only where a blob has them: most checks have no object from above)
-    if foreign.any():
-        out[inner] = foreign[labels]
-    if at_foot.any():
-        kept[inner] = at_foot[labels]
-    return out, kept
+    # (painted only where a blob has them: most checks have no object from above; label 0 is the rest)
+    for blobs, mask in zip((foreign, at_foot, followed, holding), painted):
+        blobs[0] = False
+        if blobs.any():
+            mask[inner] = blobs[labels]
+    return painted
 
 
 #: A rod or a gantry is at least this many times longer (within the picture) than it is thick.

@@ -43,7 +43,8 @@ from .material import (Evidence, clean_mask, detectable_fraction, differs_as_a_g
                        not_the_part_colour, part_palette)
 from .masks import (blobs_lying_on, bounding_box, components, dilate, disk, distance_up_to, erode, outline_zone,
                     reaching_in_from_above, shift_mask, shifted_union, crossing_the_box, mirror_match, upper_profile,
-                    MIRROR_MATCH_SHARE, PART_IN_PLACE_MAX_MISSING, PART_IN_PLACE_MIN_SEEN)
+                    FOREIGN_BEFORE_REACH_PX, FOREIGN_BEFORE_SHARE, MIRROR_MATCH_SHARE, PART_IN_PLACE_MAX_MISSING,
+                    PART_IN_PLACE_MIN_SEEN)
 
 #: Missing material is claimed only where at least this share of the part's shades (5 brightness groups)
 #: would have stood out from what the camera sees instead. A part's top faces often look like the bed
@@ -855,6 +856,13 @@ def check_shape(
                     marks = marks | standing
             shift_observed, shift_bed, marks = shift_evidence_without_rods(observed, bed_evidence, marks,
                                                                            comparison.rods, expected_a)
+            if comparison.foreign is not None and comparison.foreign.any() and followed_before is not None:
+                # nor is an object not the print's at two checks running (the parked hotend, followed into the box):
+                # a band moved onto it lands on no layer. One found foreign at this check alone may be the part
+                # itself, tipped over with its top above the box (the default set's detach_05), and stays evidence.
+                followed = blobs_lying_on(comparison.foreign, dilate(followed_before, FOREIGN_BEFORE_REACH_PX),
+                                          FOREIGN_BEFORE_SHARE)
+                shift_observed, shift_bed, marks = shift_observed & ~followed, shift_bed & ~followed, marks | followed
             shifted_band = band_shift(shift_observed, shift_bed, before_band, band_a, reach, reach // 2,
                                       int(np.ceil(layer_shift_mm * regions.px_per_mm)), tol,
                                       undecided=marks,
