@@ -18,6 +18,8 @@ from octoprint_printwatch.core.verdict import held_rise
 from .check_runs import run_checks
 
 RECORDING = Path(__file__).resolve().parents[1] / "data" / "recordings" / "l_black_top_read_late_pair"
+#: The recording's checks at layers 56-136, 8 apart: the last one's index.
+LAST_CHECK = 10
 
 
 def test_a_late_top_reading_after_no_rise_does_not_make_the_next_low_reading_a_stop():
@@ -36,10 +38,6 @@ def test_a_steady_rise_before_the_late_reading_still_makes_the_low_reading_a_sto
     results = run_checks(RECORDING, rising_before)
     assert results[-1].verdict == "fail"
     assert any("has not grown as expected over the last checks" in reason for reason in results[-1].reasons)
-
-
-#: The recording's checks at layers 56-136, 8 apart: the last one's index.
-LAST_CHECK = 10
 
 
 @pytest.mark.parametrize("readings, held", [
