@@ -252,6 +252,16 @@ def reaching_in_from_above(objects: np.ndarray, search: np.ndarray, expected: np
     return out
 
 
+def foreign_at_both_checks(foreign: np.ndarray | None, before: np.ndarray | None) -> np.ndarray | None:
+    """Of the objects not the print's (``foreign``, (h, w) bool: Comparison.foreign), those foreign at the camera's
+    previous check too (lying, FOREIGN_BEFORE_SHARE, where ``before``'s objects were, grown FOREIGN_BEFORE_REACH_PX):
+    the parked hotend followed into the box; None where there are none to read. An object found foreign at one check
+    only may be the part itself, tipped over with its top above the box."""
+    if foreign is None or before is None or not foreign.any() or not before.any():
+        return None
+    return blobs_lying_on(foreign, dilate(before, FOREIGN_BEFORE_REACH_PX), FOREIGN_BEFORE_SHARE)
+
+
 class _Reach(NamedTuple):
     """:func:`_reaching_in`'s answer, each (h, w) bool."""
     foreign: np.ndarray        # the pixels of the blobs not the print's

@@ -41,9 +41,9 @@ from .alignment import (align_candidates, align_expected, displaced_part, near_a
 from .growth import Rise, edge_in_the_frame, read_rise
 from .material import (Evidence, clean_mask, detectable_fraction, differs_as_a_group, enclosed, material_evidence,
                        not_the_part_colour, part_palette)
-from .masks import (blobs_lying_on, bounding_box, components, dilate, disk, distance_up_to, erode, outline_zone,
-                    reaching_in_from_above, shift_mask, shifted_union, crossing_the_box, mirror_match, upper_profile,
-                    FOREIGN_BEFORE_REACH_PX, FOREIGN_BEFORE_SHARE, MIRROR_MATCH_SHARE, PART_IN_PLACE_MAX_MISSING,
+from .masks import (blobs_lying_on, bounding_box, components, dilate, disk, distance_up_to, erode,
+                    foreign_at_both_checks, outline_zone, reaching_in_from_above, shift_mask, shifted_union,
+                    crossing_the_box, mirror_match, upper_profile, MIRROR_MATCH_SHARE, PART_IN_PLACE_MAX_MISSING,
                     PART_IN_PLACE_MIN_SEEN)
 
 #: Missing material is claimed only where at least this share of the part's shades (5 brightness groups)
@@ -249,22 +249,29 @@ class Comparison:
 ROD_THICKNESS_MARGIN_PX = 2.0
 
 
-def shift_evidence_without_rods(observed: np.ndarray, bed: np.ndarray, undecided: np.ndarray,
-                                rods: np.ndarray | None,
-                                expected: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(observed, bed, undecided) for :func:`band_shift` with the ``rods`` crossing the box (Comparison.rods) neither
-    material nor bed: the gantry's X rods rise with the print and hang just behind and above its top, where a band
-    moved up or sideways would land (cross-check seed 14 `031`: a band moved 18 px up onto the rod read as a shift of
-    6 mm, 1,055 confirming px of 1,314). A rod is thin: material outside the ``expected`` part thicker than the
-    thickest rod (ROD_THICKNESS_MARGIN_PX) lying on a rod's line is something in front of it (a shifted band merged
-    with the rod in the image), and stays evidence. All (h, w) bool."""
-    if rods is None or not rods.any():
-        return observed, bed, undecided
-    half = float(cv2.distanceTransform(rods.astype(np.uint8), cv2.DIST_L2, 3).max())
-    thicker = cv2.morphologyEx((observed & ~expected).astype(np.uint8), cv2.MORPH_OPEN,
-                               disk(half + ROD_THICKNESS_MARGIN_PX)).astype(bool)
-    rods = rods & ~thicker
-    return observed & ~rods, bed & ~rods, undecided | rods
+def shift_evidence_without(observed: np.ndarray, bed: np.ndarray, undecided: np.ndarray, expected: np.ndarray, *,
+                           rods: np.ndarray | None = None,
+                           lasting_foreign: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(observed, bed, undecided) for :func:`band_shift` with what lies above and behind the part, not the print's,
+    neither material nor bed: a band moved onto it lands on no layer. All (h, w) bool.
+
+    ``rods``: the rods crossing the box (Comparison.rods). The gantry's X rods rise with the print and hang just behind
+    and above its top, where a band moved up or sideways would land (cross-check seed 14 `031`: a band moved 18 px up
+    onto the rod read as a shift of 6 mm, 1,055 confirming px of 1,314). A rod is thin: material outside the
+    ``expected`` part thicker than the thickest rod (ROD_THICKNESS_MARGIN_PX) lying on a rod's line is something in
+    front of it (a shifted band merged with the rod in the image), and stays evidence.
+    ``lasting_foreign``: the objects not the print's at this check and the previous one
+    (masks.foreign_at_both_checks: the parked hotend followed into the box; cross-check seed 43 `012_normal`, an
+    8.8-mm "shift" onto it)."""
+    if rods is not None and rods.any():
+        half = float(cv2.distanceTransform(rods.astype(np.uint8), cv2.DIST_L2, 3).max())
+        thicker = cv2.morphologyEx((observed & ~expected).astype(np.uint8), cv2.MORPH_OPEN,
+                                   disk(half + ROD_THICKNESS_MARGIN_PX)).astype(bool)
+        rods = rods & ~thicker
+        observed, bed, undecided = observed & ~rods, bed & ~rods, undecided | rods
+    if lasting_foreign is not None:
+        observed, bed, undecided = observed & ~lasting_foreign, bed & ~lasting_foreign, undecided | lasting_foreign
+    return observed, bed, undecided
 
 
 #: A newest band lies inside the older layers' outline in a view where no more than this share of it stands beyond the
@@ -854,15 +861,11 @@ def check_shape(
                                              cropped(older_looks[0][0], (h, w), crop) if older_looks else None)
                 if standing is not None:
                     marks = marks | standing
-            shift_observed, shift_bed, marks = shift_evidence_without_rods(observed, bed_evidence, marks,
-                                                                           comparison.rods, expected_a)
-            if comparison.foreign is not None and comparison.foreign.any() and followed_before is not None:
-                # nor is an object not the print's at two checks running (the parked hotend, followed into the box):
-                # a band moved onto it lands on no layer. One found foreign at this check alone may be the part
-                # itself, tipped over with its top above the box (the default set's detach_05), and stays evidence.
-                followed = blobs_lying_on(comparison.foreign, dilate(followed_before, FOREIGN_BEFORE_REACH_PX),
-                                          FOREIGN_BEFORE_SHARE)
-                shift_observed, shift_bed, marks = shift_observed & ~followed, shift_bed & ~followed, marks | followed
+            # (objects foreign at this check only stay evidence: the default set's detach_05 is caught on its
+            # cylinder tipped over, its top above the box)
+            shift_observed, shift_bed, marks = shift_evidence_without(
+                observed, bed_evidence, marks, expected_a, rods=comparison.rods,
+                lasting_foreign=foreign_at_both_checks(comparison.foreign, followed_before))
             shifted_band = band_shift(shift_observed, shift_bed, before_band, band_a, reach, reach // 2,
                                       int(np.ceil(layer_shift_mm * regions.px_per_mm)), tol,
                                       undecided=marks,

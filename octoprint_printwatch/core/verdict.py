@@ -122,6 +122,11 @@ def enough_rise_readings(readings: Sequence[float], usable: Mapping[str, ShapeRe
     return len(readings) >= 2 or (bool(readings) and len(usable) == 1)
 
 
+def median_rise(readings: Sequence[float], usable: Mapping[str, ShapeResult]) -> float | None:
+    """The median of ``readings`` of the rise where they make one (:func:`enough_rise_readings`), else None."""
+    return float(np.median(readings)) if enough_rise_readings(readings, usable) else None
+
+
 def each_views_rise(usable: Mapping[str, ShapeResult]) -> list[float]:
     """Each usable view's reading of the rise since its previous check, fine or else to the pixel
     (:func:`rise_since_previous_check`), where it has one."""
@@ -401,10 +406,9 @@ def rise_for_loose_material(usable: Mapping[str, ShapeResult], growth: Sequence[
     alone it proves nothing (a normal print reads under 50 % at a few checks); here it is only the second
     witness of material new beyond the outline, which such a check of a normal print does not show: a part
     knocked off or stopped under a pile of strands does both."""
-    if enough_rise_readings(growth, usable):
-        return float(np.median(growth))
-    readings = [g for g in each_views_rise(usable) if g >= SANK_BELOW_PCT]
-    return float(np.median(readings)) if enough_rise_readings(readings, usable) else None
+    fine = median_rise(growth, usable)
+    return fine if fine is not None else median_rise([g for g in each_views_rise(usable) if g >= SANK_BELOW_PCT],
+                                                     usable)
 
 
 def rise_over_spans(usable: Mapping[str, ShapeResult]) -> float | None:
@@ -414,9 +418,8 @@ def rise_over_spans(usable: Mapping[str, ShapeResult]) -> float | None:
     so it reads more of the rise than the last check saw: under a limit, the last check's rise is under it too."""
     if any(rise_since_previous_check(r) is not None for r in usable.values()):
         return None
-    readings = [r.span_growth_pct for r in usable.values()
-                if r.span_growth_pct is not None and r.span_growth_pct >= SANK_BELOW_PCT]
-    return float(np.median(readings)) if enough_rise_readings(readings, usable) else None
+    return median_rise([r.span_growth_pct for r in usable.values()
+                        if r.span_growth_pct is not None and r.span_growth_pct >= SANK_BELOW_PCT], usable)
 
 
 def stopped_and_textured(usable: Mapping[str, ShapeResult], settings: DetectionSettings, *,

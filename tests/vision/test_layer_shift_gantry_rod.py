@@ -5,7 +5,7 @@ something in front of it (a shifted band merged with the rod in the image) and s
 import numpy as np
 
 from octoprint_printwatch.core.layer_shift import band_shift
-from octoprint_printwatch.core.shape_check import compare_masks, shift_evidence_without_rods
+from octoprint_printwatch.core.shape_check import compare_masks, shift_evidence_without
 
 from .synthetic import Box
 from .test_layer_shift import J_ONE
@@ -20,7 +20,7 @@ def maps_of(observed, rods=None):
     """band_shift's (support, against, moved) maps on ``observed``, with ``rods`` neither material nor bed."""
     bed, undecided = ~observed, np.zeros_like(observed)
     if rods is not None:
-        observed, bed, undecided = shift_evidence_without_rods(observed, bed, undecided, rods, EXPECTED)
+        observed, bed, undecided = shift_evidence_without(observed, bed, undecided, EXPECTED, rods=rods)
     found = band_shift(observed, bed, BEFORE.mask(), BAND.mask(), 24, 12, 5, 2.0, undecided=undecided,
                        bed_to_image=J_ONE)
     return found, found.maps[:3]
