@@ -43,8 +43,8 @@ from .material import (Evidence, clean_mask, detectable_fraction, differs_as_a_g
                        not_the_part_colour, part_palette)
 from .masks import (blobs_lying_on, bounding_box, components, dilate, disk, distance_up_to, erode,
                     foreign_at_both_checks, outline_zone, reaching_in_from_above, shift_mask, shifted_union,
-                    crossing_the_box, mirror_match, upper_profile, MIRROR_MATCH_SHARE, PART_IN_PLACE_MAX_MISSING,
-                    PART_IN_PLACE_MIN_SEEN)
+                    tipped_over, crossing_the_box, mirror_match, upper_profile, MIRROR_MATCH_SHARE,
+                    PART_IN_PLACE_MAX_MISSING, PART_IN_PLACE_MIN_SEEN)
 
 #: Missing material is claimed only where at least this share of the part's shades (5 brightness groups)
 #: would have stood out from what the camera sees instead. A part's top faces often look like the bed
@@ -410,7 +410,9 @@ def compare_masks(
     ``band_reach`` of it. ``top_tolerance`` (px) widens the tolerance upwards only (the vertical
     alignment is the least certain); ``linked`` ((h, w) bool, everything not confidently bed) groups
     extra pixels into objects for the "from above" test, and a blob reaching the part's lowest
-    quarter is never foreign (a tipped part stands on the bed). ``not_the_prints`` ((h, w) bool extra ->
+    quarter is never foreign (a tipped part stands on the bed), nor, where the part is not in its place, one new since
+    the previous check, of the part's colour and resting on its outline (masks.tipped_over: a part tipped over with
+    its top above the box). ``not_the_prints`` ((h, w) bool extra ->
     (h, w) bool) marks blobs of the extra material that are something else, found with what these masks
     cannot show (the frame's colours, the full frame); they are left out of every figure.
     ``foreign_before`` ((h, w) bool): the objects found foreign at the camera's previous check
@@ -435,6 +437,9 @@ def compare_masks(
         objects = outside if linked is None else (outside | (linked & ~grown))
         foreign = reaching_in_from_above(objects, search, expected, material=outside, before=foreign_before,
                                          outline=grown if in_place else None)
+        if not in_place and not_the_prints is not None and foreign.any():
+            # ... unless it is the part itself, tipped over, its top above the box (masks.tipped_over)
+            foreign &= ~tipped_over(foreign, observed, grown, foreign_before, not_the_prints)
         outside &= ~foreign
         foreign &= observed        # (followed on its material: not on the shadow or mirror image it links)
     extra = (outside & search).astype(np.uint8)
