@@ -252,16 +252,16 @@ def reaching_in_from_above(objects: np.ndarray, search: np.ndarray, expected: np
     return out
 
 
-#: An object found reaching in from above the box is the part itself, tipped over with its top above the box, where the
-#: part is not in its place in that view (PART_IN_PLACE_MAX_MISSING), the object is new there since the previous check
-#: (not lying, FOREIGN_BEFORE_SHARE, where that check's objects hung), of the part's colour (at most this share of its
-#: material read as another colour: the parked hotend, a hand) and meets the part's outline along half its extent or
-#: more (TIPPED_MIN_CONTACT_SHARE; the hotend behind a part in place meets it along the part's top edge).
-#: Measured (thirty-third session, cross-check seeds 20-37: 309 normal prints, 150 detachments): of 697 such objects
-#: (100 px or more) at normal prints' checks, 105 lay where the part was not in place, 64 of them new, 40 of those of
-#: the part's colour and 2 met the outline along half their extent (215 and 230 px; no verdict changed); of 192 after a
-#: detachment's onset, 21. Over seeds 20-45 and the default set only 14 checks changed verdict, all ok -> fail after a
-#: detachment's onset (seed 45 ``021_detach``, a frame tipped 38 degrees before the first check, was missed).
+#: An object found reaching in from above the box is the part itself, tipped over with its top above the box, where bed
+#: shows in the part's place in that view (over PART_IN_PLACE_MAX_MISSING of it missing; a part merely not seen whole
+#: there may have the parked hotend of its colour above it: our default set's ``under_extrusion_02`` tower), the object
+#: is new there since the previous check (not lying, FOREIGN_BEFORE_SHARE, where that check's objects hung), of the
+#: part's colour (at most this share of its material read as another colour: the parked hotend, a hand) and meets the
+#: part's outline along half its extent or more (TIPPED_MIN_CONTACT_SHARE; the hotend at a part's corner meets it at a
+#: point). Measured (thirty-third session, cross-check seeds 20-37: 309 normal prints, 150 detachments): of 697 such
+#: objects (100 px or more) at normal prints' checks, 57 lay where bed showed in the part's place, 48 of them new, 32 of
+#: those of the part's colour and 1 met the outline along half its extent (230 px; no verdict changed); of 192 after a
+#: detachment's onset, 20. Seed 45 ``021_detach`` (a frame tipped 38 degrees before the first check) was missed.
 TIPPED_MAX_OTHER_COLOUR_SHARE = 0.2
 TIPPED_MIN_CONTACT_SHARE = 0.5
 
@@ -272,7 +272,7 @@ def tipped_over(foreign: np.ndarray, material: np.ndarray, outline: np.ndarray, 
     tipped over: each new since the previous check (``before``: the material of the objects found foreign there, or
     None), its ``material`` ((h, w) bool) of the part's colour (``other_colour``: (h, w) bool material -> (h, w) bool,
     its blobs of another colour) and in contact with the part's ``outline`` zone ((h, w) bool) along
-    TIPPED_MIN_CONTACT_SHARE of its extent or more. Call it only where the part is not in its place in this view."""
+    TIPPED_MIN_CONTACT_SHARE of its extent or more. Call it only where bed shows in the part's place in this view."""
     out = np.zeros(foreign.shape, bool)
     contact = _ring_contact(foreign, outline_ring(outline))
     if contact is None:

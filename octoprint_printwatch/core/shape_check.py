@@ -410,7 +410,7 @@ def compare_masks(
     ``band_reach`` of it. ``top_tolerance`` (px) widens the tolerance upwards only (the vertical
     alignment is the least certain); ``linked`` ((h, w) bool, everything not confidently bed) groups
     extra pixels into objects for the "from above" test, and a blob reaching the part's lowest
-    quarter is never foreign (a tipped part stands on the bed), nor, where the part is not in its place, one new since
+    quarter is never foreign (a tipped part stands on the bed), nor, where bed shows in the part's place, one new since
     the previous check, of the part's colour and resting on its outline (masks.tipped_over: a part tipped over with
     its top above the box). ``not_the_prints`` ((h, w) bool extra ->
     (h, w) bool) marks blobs of the extra material that are something else, found with what these masks
@@ -426,7 +426,8 @@ def compare_masks(
     objects = foreign = rods_without_foreign = None
     # (a part that tipped over or slid away can look like a rod, or rise above the box joined to its foot
     # only along its old outline: it is missing from its place)
-    in_place = (np.count_nonzero(missing) <= PART_IN_PLACE_MAX_MISSING * max(np.count_nonzero(expected), 1)
+    gone_from_place = np.count_nonzero(missing) > PART_IN_PLACE_MAX_MISSING * max(np.count_nonzero(expected), 1)
+    in_place = (not gone_from_place
                 and np.count_nonzero(observed & core) >= PART_IN_PLACE_MIN_SEEN * np.count_nonzero(core))
     if outside.any():
         # Something reaching in from outside the search box (the parked hotend, the gantry, a hand) is not
@@ -437,8 +438,9 @@ def compare_masks(
         objects = outside if linked is None else (outside | (linked & ~grown))
         foreign = reaching_in_from_above(objects, search, expected, material=outside, before=foreign_before,
                                          outline=grown if in_place else None)
-        if not in_place and not_the_prints is not None and foreign.any():
-            # ... unless it is the part itself, tipped over, its top above the box (masks.tipped_over)
+        if gone_from_place and not_the_prints is not None and foreign.any():
+            # ... unless it is the part itself, tipped over, its top above the box (masks.tipped_over; where bed shows
+            # in its place: a part merely not seen whole there may have the parked hotend of its colour above it)
             foreign &= ~tipped_over(foreign, observed, grown, foreign_before, not_the_prints)
         outside &= ~foreign
         foreign &= observed        # (followed on its material: not on the shadow or mirror image it links)

@@ -1,6 +1,6 @@
 """A part tipped over with its top above the search box is the print's, not an object reaching in from above
-(masks.tipped_over: where the part is not in its place in a view, an object of the part's colour, new since the previous
-check and meeting the part's outline along half its extent, is the part itself).
+(masks.tipped_over: where bed shows in the part's place in a view, an object of the part's colour, new since the
+previous check and meeting the part's outline along half its extent, is the part itself).
 
 What a user would notice: a detached part left printing. Cross-check seed 45 ``021_detach`` (a grey frame 59 mm wide and
 11 mm tall on a dark bed, four 640x480 cameras, two kept here): the part tipped 38 degrees before the first check, its
