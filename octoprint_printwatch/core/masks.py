@@ -267,12 +267,13 @@ TIPPED_MIN_CONTACT_SHARE = 0.5
 
 
 def tipped_over(foreign: np.ndarray, material: np.ndarray, outline: np.ndarray, before: np.ndarray | None,
-                other_colour: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+                not_the_prints: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
     """(h, w) bool: the blobs of ``foreign`` (:func:`reaching_in_from_above`, (h, w) bool) that are the part itself,
     tipped over: each new since the previous check (``before``: the material of the objects found foreign there, or
-    None), its ``material`` ((h, w) bool) of the part's colour (``other_colour``: (h, w) bool material -> (h, w) bool,
-    its blobs of another colour) and in contact with the part's ``outline`` zone ((h, w) bool) along
-    TIPPED_MIN_CONTACT_SHARE of its extent or more. Call it only where bed shows in the part's place in this view."""
+    None), its ``material`` ((h, w) bool) the print's (``not_the_prints``: (h, w) bool material -> (h, w) bool, its
+    blobs of another colour than the part's or the hotend's mirror image: shape_check's) and in contact with the part's
+    ``outline`` zone ((h, w) bool) along TIPPED_MIN_CONTACT_SHARE of its extent or more. Call it only where bed shows
+    in the part's place in this view."""
     out = np.zeros(foreign.shape, bool)
     contact = _ring_contact(foreign, outline_ring(outline))
     if contact is None:
@@ -282,16 +283,23 @@ def tipped_over(foreign: np.ndarray, material: np.ndarray, outline: np.ndarray, 
     total = np.bincount(labels[held], minlength=span.size)
     tipped = (span >= TIPPED_MIN_CONTACT_SHARE * extent) & (total > 0)
     if before is not None and before.any():
-        there = np.bincount(labels[held & dilate(before, FOREIGN_BEFORE_REACH_PX)[inner]], minlength=span.size)
-        tipped &= there < FOREIGN_BEFORE_SHARE * total
+        tipped &= _held_where_before(labels, held, before, inner) < FOREIGN_BEFORE_SHARE * total
     tipped[0] = False
     if tipped.any():
         candidates = np.zeros(foreign.shape, bool)
         candidates[inner] = tipped[labels] & held
-        other = np.bincount(labels[other_colour(candidates)[inner]], minlength=span.size)
+        other = np.bincount(labels[not_the_prints(candidates)[inner]], minlength=span.size)
         tipped &= other <= TIPPED_MAX_OTHER_COLOUR_SHARE * total
         out[inner] = tipped[labels]
     return out
+
+
+def _held_where_before(labels: np.ndarray, held: np.ndarray, before: np.ndarray, inner: tuple[slice, slice]
+                       ) -> np.ndarray:
+    """(count,) int: per blob of ``labels`` (labelled on the box ``inner`` of the full masks), its ``held`` pixels
+    ((h', w') bool on that box) lying where ``before``'s objects hung ((h, w) bool, grown FOREIGN_BEFORE_REACH_PX): how
+    much of it lies where an object found foreign at the previous check was."""
+    return np.bincount(labels[held & dilate(before, FOREIGN_BEFORE_REACH_PX)[inner]], minlength=int(labels.max()) + 1)
 
 
 def foreign_at_both_checks(foreign: np.ndarray | None, before: np.ndarray | None) -> np.ndarray | None:
@@ -375,7 +383,7 @@ def _reaching_in(objects: np.ndarray, search: np.ndarray, expected: np.ndarray, 
     followed, holding = np.zeros(count, bool), np.zeros(count, bool)
     if before is not None and before.any():
         held = objects[inner] if material is None else material[inner] & objects[inner]
-        there = np.bincount(labels[held & dilate(before, FOREIGN_BEFORE_REACH_PX)[inner]], minlength=count)
+        there = _held_where_before(labels, held, before, inner)
         total = np.bincount(labels[held], minlength=count)
         near_part = np.bincount(labels[held & dilate(expected, FOREIGN_APART_PX)[inner]], minlength=count)
         followed = (total > 0) & (near_part == 0) & (there >= FOREIGN_BEFORE_SHARE * np.maximum(total, 1))
