@@ -175,6 +175,7 @@ class LayerShift:
     viewpoints : how many clearly different directions (VIEWPOINT_APART_DEG, opposite sides apart) those cameras look
         from, of those with a share of the evidence (VIEWPOINT_MIN_SHARE of ``moved``).
     moved_by : {camera: pixels the shift changes in it (weighted as pooled)}.
+    read_by : {camera: (support, against)} in the cameras it shows to clearly (weighted as pooled).
     cameras : the cameras it shows to clearly (image shift of at least their ``min_dx``), with their px shift.
     overhang : of ``support``, material seen where the model has none.
     moved_sure : of ``moved``, the pixels decided (material or bed) or beyond the alignment tolerance of the
@@ -196,6 +197,8 @@ class LayerShift:
     null_score: float = 0.0
     viewpoints: int = 1   # of those cameras, how many look from clearly different directions
     moved_by: dict[str, float] = field(default_factory=dict)
+    # {camera: (support, against)} of the cameras it shows to clearly, weighted as pooled (see contradicted_in_a_view)
+    read_by: dict[str, tuple[float, float]] = field(default_factory=dict)
     overhang: int = 0   # of the support, material seen where the model has none (the moved band sticking out)
     moved_sure: int = 0   # of moved, those decided or beyond the tolerance of the moved band's outline
     swept: int = 0   # every pixel the shift changes beyond the tolerance, decided or not (>= moved)
@@ -242,7 +245,8 @@ class LayerShift:
                    "moved_sure": self.moved_sure, "swept": self.swept,
                    **({"opposite_confirmed": round(self.opposite.confirmed_sure, 3)} if self.opposite else {}),
                    "cameras": {name: list(d) for name, d in self.cameras.items()},
-                   "moved_by": {name: round(float(v)) for name, v in self.moved_by.items()}}
+                   "moved_by": {name: round(float(v)) for name, v in self.moved_by.items()},
+                   "read_by": {name: [round(float(v)) for v in pair] for name, pair in self.read_by.items()}}
         if self.side_apart is not None:
             figures["side_apart"] = [round(float(v)) for v in self.side_apart]
         if self.onto_earlier_places:
@@ -532,6 +536,7 @@ def _pooled(views: Mapping[str, BandShift], grid: np.ndarray, vertical: bool = T
     total = np.zeros((6, len(grid)), np.float64)
     null = np.zeros(len(grid), np.float64)
     clear = np.zeros(len(grid), bool)          # the shift shows clearly in at least one camera
+    untested = np.zeros(len(grid), bool)       # ... or lies beyond the search of a camera it shows to clearly
     shows, directions, moved_by, per_camera = {}, {}, {}, {}
     heights = {}    # per camera: (weight per shift, its null scores, image y px per mm of height)
     for name, view in views.items():
@@ -569,18 +574,25 @@ def _pooled(views: Mapping[str, BandShift], grid: np.ndarray, vertical: bool = T
         else:
             null += view.null_score * weight
         clear |= weight >= 1.0
+        untested |= ~ok & (shown >= view.min_dx)
         shows[name] = (ok & (shown >= view.min_dx), image)
     if not shows:
         return None
     if heights:
         null += _height_null(heights, refuted=refuted)
     score = total[0] - 2.0 * total[1]
-    score[(total[2] <= 0) | ~clear] = -np.inf
+    # A move a camera would show clearly but whose image shift lies beyond that camera's search (BandShift.maps: the
+    # band's own reach, half as far up and down) is one that camera cannot speak to, and the others' pixels alone
+    # confirm none: a view's outline laid off the part reads as a large move there that its stereo partner or another
+    # view, looking from elsewhere, would show 12-16 px away, just beyond its search (cross-check seeds 24
+    # `018_normal`, 35 `020_runout`, 43 `025_detach`: 9-10 mm, one view, before any failure).
+    score[(total[2] <= 0) | ~clear | untested] = -np.inf
     best = int(np.argmax(score))
     if not np.isfinite(score[best]):
         return None
     cameras = {name: (int(image[best, 0]), int(image[best, 1])) for name, (ok, image) in shows.items() if ok[best]}
     share = {name: float(moved_by[name][best]) for name in cameras}
+    read_by = {name: (float(per_camera[name][0, best]), float(per_camera[name][1, best])) for name in cameras}
     looking = {name: directions[name] for name in cameras}
     min_share = VIEWPOINT_MIN_SHARE * float(total[2, best])
     side_apart = None
@@ -589,8 +601,9 @@ def _pooled(views: Mapping[str, BandShift], grid: np.ndarray, vertical: bool = T
                                  refuted=refuted)
     return LayerShift(side_apart=side_apart, shift_mm=grid[best].copy(), support=int(round(total[0, best])),
                       against=int(round(total[1, best])), moved=int(round(total[2, best])), cameras=cameras,
-                      null_score=float(null[best]), moved_by=share, overhang=int(round(total[3, best])),
-                      moved_sure=int(round(total[4, best])), swept=int(round(total[5, best])),
+                      null_score=float(null[best]), moved_by=share, read_by=read_by,
+                      overhang=int(round(total[3, best])), moved_sure=int(round(total[4, best])),
+                      swept=int(round(total[5, best])),
                       # (cameras facing each other count apart: each one's outline error is its own, so two agreeing
                       # on one bed shift are no offset of one view; they see it move the opposite ways in their images)
                       viewpoints=count_viewpoints(looking, share, min_share, period=2 * np.pi),
@@ -923,7 +936,19 @@ def confirms_layer_shift(shift: LayerShift, min_mm: float) -> bool:
     return ((_confirms(shift, min_mm, SHIFT_CONFIRMED, SHIFT_CONFIRMED_ONE_VIEW) or _confirms_new(shift, min_mm)
              or persists(shift, min_mm) or _confirms_grown_in(shift, min_mm))
             and not was_there_before(shift) and not there_since_first_check(shift) and not shift.onto_earlier_places
-            and not beyond_the_search_at_the_first_check(shift))
+            and not beyond_the_search_at_the_first_check(shift) and not contradicted_in_a_view(shift))
+
+
+def contradicted_in_a_view(shift: LayerShift) -> bool:
+    """Whether a camera the shift shows to clearly reads it as clearly not there on its own: SHIFT_MIN_SUPPORT_PX or
+    more of the pixels it changes there contradict it, and those confirming it are at most SHIFT_AGAINST of them (the
+    share a confirmed shift allows the other way round). Layers that slid are one rigid move of the part's top, the
+    same in every view; the pooled share lets a view that changes many pixels outvote one that changes few, and an
+    outline laid off the part along a brim in one view reads as a large move there (cross-check seed 47
+    ``028_runout`` s1: 404 of 440 pixels confirming 9 px, while s0, whose outline sits on the part, contradicts the
+    same bed move with 74 of its 90 and confirms it with 6)."""
+    return any(against >= SHIFT_MIN_SUPPORT_PX and support <= SHIFT_AGAINST * against
+               for support, against in shift.read_by.values())
 
 
 def beyond_the_search_at_the_first_check(shift: LayerShift) -> bool:
