@@ -3,8 +3,9 @@ other views can confirm alone (layer_shift._pooled): that camera cannot speak to
 
 What a user would notice: a print paused at its first check for a layer shift. Cross-check seed 43 ``025_detach`` (a
 frustum in kapton's own colour on kapton, 48 mm tall, three 1280x720 cameras, s0 and s2 kept here; the part tips over
-only at layer 172): at layer 24 s2's newest band read as moved 34 px on the pixels it decides, a 9.4-mm move that s0
-would show 15 px sideways, one pixel beyond its own search. Only s2's pixels counted, and the print was paused.
+only at layer 172): at layer 24 s2's newest band read as moved 17 px up and 7 px sideways (93 % of the pixels that
+move changes there confirming it), a 9.4-mm bed move that s0 would show 15 px sideways, one pixel beyond its own
+search. Only s2's pixels counted, and the print was paused.
 """
 from __future__ import annotations
 
