@@ -450,11 +450,11 @@ def estimate_layer_shift(views: Mapping[str, BandShift], *, max_mm: float = 8.0,
     steps = np.arange(-max_mm, max_mm + 1e-9, step_mm)
     gx, gy = np.meshgrid(steps, steps)
     grid = np.stack([gx.ravel(), gy.ravel()], axis=1)
-    found = _pooled(views, grid, refuted=refuted)
+    found = _pooled(views, grid, refuted=refuted, testable_only=True)
     if found is not None and found.sides < 2:
         # seen from one side, a move up or down the image is also a part standing taller or lower, or that
         # camera's calibration error (3x the stated one paused a normal print): only sideways counts there
-        found = _pooled(views, grid, vertical=False, refuted=refuted)
+        found = _pooled(views, grid, vertical=False, refuted=refuted, testable_only=True)
     if found is not None:
         found.opposite = _pooled(views, -found.shift_mm.reshape(1, 2), vertical=found.vertical, refuted=refuted)
         found.at_search_edge = bool(np.max(np.abs(found.shift_mm)) >= max_mm - 0.5 * step_mm)
@@ -530,9 +530,11 @@ def _tolerant(scores: np.ndarray) -> np.ndarray:
 
 
 def _pooled(views: Mapping[str, BandShift], grid: np.ndarray, vertical: bool = True,
-            refuted: RefutedHeights | None = None) -> LayerShift | None:
+            refuted: RefutedHeights | None = None, testable_only: bool = False) -> LayerShift | None:
     """The best of the (n, 2) bed shifts ``grid`` (mm) by the pooled score (estimate_layer_shift); a camera
-    counts the shift's vertical image move beyond its tolerance too unless ``vertical`` is False."""
+    counts the shift's vertical image move beyond its tolerance too unless ``vertical`` is False. ``testable_only``
+    (the search for the move, not the reading of a given one at other checks): a move lying beyond the search of a
+    camera it would show to clearly is not a candidate."""
     total = np.zeros((6, len(grid)), np.float64)
     null = np.zeros(len(grid), np.float64)
     clear = np.zeros(len(grid), bool)          # the shift shows clearly in at least one camera
@@ -581,12 +583,13 @@ def _pooled(views: Mapping[str, BandShift], grid: np.ndarray, vertical: bool = T
     if heights:
         null += _height_null(heights, refuted=refuted)
     score = total[0] - 2.0 * total[1]
-    # A move a camera would show clearly but whose image shift lies beyond that camera's search (BandShift.maps: the
-    # band's own reach, half as far up and down) is one that camera cannot speak to, and the others' pixels alone
-    # confirm none: a view's outline laid off the part reads as a large move there that its stereo partner or another
-    # view, looking from elsewhere, would show 12-16 px away, just beyond its search (cross-check seeds 24
-    # `018_normal`, 35 `020_runout`, 43 `025_detach`: 9-10 mm, one view, before any failure).
-    score[(total[2] <= 0) | ~clear | untested] = -np.inf
+    # In the search for the move (testable_only), a move a camera would show clearly but whose image shift lies beyond
+    # that camera's search (BandShift.maps: the band's own reach, half as far up and down) is one that camera cannot
+    # speak to, and the others' pixels alone confirm none: a view's outline laid off the part reads as a large move
+    # there that its stereo partner or another view, looking from elsewhere, would show 12-16 px away, just beyond its
+    # search (cross-check seeds 24 `018_normal`, 35 `020_runout`, 43 `025_detach`: 9-10 mm, one view, before any
+    # failure). Readings of a given move at other checks (layer_shift_at) keep every view's say as it is.
+    score[(total[2] <= 0) | ~clear | (untested & testable_only)] = -np.inf
     best = int(np.argmax(score))
     if not np.isfinite(score[best]):
         return None

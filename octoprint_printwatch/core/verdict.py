@@ -133,9 +133,15 @@ def each_views_rise(usable: Mapping[str, ShapeResult]) -> list[float]:
     return [reading for r in usable.values() if (reading := rise_since_previous_check(r)) is not None]
 
 
+def _steady(reading: float) -> float:
+    """A reading of the rise of :data:`RISE_OVERSHOOT_PCT` or more counts as none: no part rises faster than its
+    model, so its top jumped in the picture (read a check late, or a part standing up where it tipped over)."""
+    return 0.0 if reading >= RISE_OVERSHOOT_PCT else reading
+
+
 def _rises(readings: Sequence[float], steadily: bool = False) -> bool:
     if steadily:
-        readings = [0.0 if reading >= RISE_OVERSHOOT_PCT else reading for reading in readings]
+        readings = [_steady(reading) for reading in readings]
     return bool(readings) and float(np.median(readings)) >= VISIBLY_RISING_PCT
 
 
@@ -512,15 +518,15 @@ def rising_over_spans(usable: Mapping[str, ShapeResult]) -> bool:
     """Whether :data:`STOPPED_VIEWS` or more views that see the part as its model says (their shape check passed) read
     the rise over a span of checks only (``ShapeResult.span_growth_pct``) and every one of them reads more than a part
     stopped since the previous check rose: over n checks at most (n - 1) / n of the expected, read above that by more
-    than a pixel step (:data:`FINE_STALL_PCT`) and under :data:`RISE_OVERSHOOT_PCT` (a top that jumped in the
-    picture). Against one view's fine reading of no rise: a top whose newest band that view read as background at one
-    check (cross-check seed 47 ``004_normal`` s1, a dark red tower reading 43 %, 0 %, 157 % at three checks running,
-    while s0L and s0R read 100 % and 86 % over three checks). A view that sees material where the model has none (a
+    than a pixel step (:data:`FINE_STALL_PCT`), an overshoot counting as none (:func:`_steady`). Against one view's
+    fine reading of no rise: a top whose newest band that view read as background at one check (cross-check seed 47
+    ``004_normal`` s1, a dark red tower reading 43 %, 0 %, 157 % at three checks running, while s0L and s0R read 100 %
+    and 86 % over three checks). A view that sees material where the model has none (a
     part knocked off, strands piling up) reads their top, not the part's."""
     spans = [(r.span_growth_pct, r.growth_span or 1) for r in usable.values()
              if r.passed and r.growth_pct is None and r.span_growth_pct is not None]
     return len(spans) >= STOPPED_VIEWS and all(
-        100.0 * (span - 1) / span + FINE_STALL_PCT < reading < RISE_OVERSHOOT_PCT for reading, span in spans)
+        _steady(reading) > 100.0 * (span - 1) / span + FINE_STALL_PCT for reading, span in spans)
 
 
 def part_stalled(usable: Mapping[str, ShapeResult], settings: DetectionSettings, *, top_closing: bool,
