@@ -584,8 +584,8 @@ class PairSizeCheck:
         """The width term (% beyond what the model and the pair's calibration allow) to hold against the print: none
         for a too-wide reading that is the first width this pair measures in the print (noted in ``notes``). A width
         needs both sides of the part seen as silhouette edges in both views, so a pair's first one comes where those
-        edges first show (a narrow part's sides clearing its brim or skirt), with nothing of its own to compare it
-        with; from the second on, a width over the limit is held at once. A part too wide at the first reading (loose
+        edges first show, with no reading of its own to compare it with; from the second on, a width over the limit is
+        held at once. A part too wide at the first reading (loose
         material, a shifted tier) is still too wide at the next (cross-check seed 36 ``016_normal``: a thin L read
         8.9 mm wide at the pair's first width, 39.6 % over its 6.4 mm, and 7.0-7.3 mm at every later check)."""
         if self.widths_read == 1 and error_pct > self.settings.threshold_pct:
