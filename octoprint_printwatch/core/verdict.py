@@ -16,7 +16,7 @@ from .layer_shift import (BandShift, LayerShift, band_reads_lowered, confirms_la
 from .shape_check import ShapeResult
 from .nest import (NEST_MAX_COVERAGE, PART_SLOWED_SOMEWHAT_PCT, SOLID_MIN_COVERAGE, TEXTURE_JUMP_STRONG,
                    texture_jump_for, textured_views)
-from .tangle import SLOWED_RISE_PCT, TWO_VIEWS_MM2, loose_material
+from .tangle import TWO_VIEWS_MM2, loose_material
 
 
 #: A view reading more than this share (%) of the whole part missing gives no layer-shift evidence: a shift moves the
@@ -421,17 +421,14 @@ def rise_for_loose_material(usable: Mapping[str, ShapeResult], growth: Sequence[
                                                      usable)
 
 
-def rose_in_a_view_read_to_the_pixel(usable: Mapping[str, ShapeResult], rise_pct: float | None) -> bool:
-    """Whether a rise of ``rise_pct`` (% of the expected) that counts as the part slowing somewhat (SLOWED_RISE_PCT
-    to PART_SLOWED_SOMEWHAT_PCT: the texture rule's TEXTURE_JUMP_STRONG band) is the median of readings to the pixel
-    alone (no usable view reads the rise finely) of which one reads the full rise (FULL_RISE_PCT, under
-    RISE_OVERSHOOT_PCT: :func:`_steady`). Each such reading is +-25 %, so the median of one view's 50 % and another's
-    100 % says no more than "rose three quarters, give or take a pixel" while the view reading 100 % saw the whole rise:
-    no part slowed under a nest of strands there (a stopped part reads 0 +- a pixel step in every view). Cross-check
-    seed 39 ``006_normal``, a yellow cone on black PEI seen small by two cameras: s0 50 %, s1 100 %, and s0's newest
-    band, near its texture floor at the two checks before, 2.9 times as textured at the cone's shoulder."""
-    if rise_pct is None or not SLOWED_RISE_PCT <= rise_pct < PART_SLOWED_SOMEWHAT_PCT:
-        return False
+def rose_in_a_view_read_to_the_pixel(usable: Mapping[str, ShapeResult]) -> bool:
+    """Whether no usable view reads the rise finely and one reads the full rise to the pixel (``coarse_growth_pct`` of
+    FULL_RISE_PCT, under RISE_OVERSHOOT_PCT: :func:`_steady`). Where the texture rule weighs a rise of 50-79 % (its
+    TEXTURE_JUMP_STRONG band), such a rise is then the median of readings of +-25 % each: one view's 50 % and another's
+    100 % say no more than "rose three quarters, give or take a pixel", while the view reading 100 % saw the whole rise,
+    and a part stopped under a nest of strands reads 0 +- a pixel step in every view. Cross-check seed 39
+    ``006_normal``, a yellow cone on black PEI seen small by two cameras: s0 50 %, s1 100 %, and s0's newest band, near
+    its texture floor at the two checks before, 2.9 times as textured at the cone's shoulder."""
     if any(r.growth_pct is not None for r in usable.values()):
         return False
     return any(r.coarse_growth_pct is not None and _steady(r.coarse_growth_pct) >= FULL_RISE_PCT
@@ -1008,8 +1005,9 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     over_spans = None if rise_pct is not None or top_closing else rise_over_spans(usable)
     texture_rise = rise_pct if over_spans is None else over_spans
     over = "" if over_spans is None else " over the last checks"
-    # (nor where the rise is read to the pixel alone and one view reads it full: rose_in_a_view_read_to_the_pixel)
-    jump = None if rose_in_a_view_read_to_the_pixel(usable, texture_rise) else texture_jump_for(texture_rise)
+    jump = texture_jump_for(texture_rise)
+    if jump == TEXTURE_JUMP_STRONG and rose_in_a_view_read_to_the_pixel(usable):
+        jump = None   # a part that slowed somewhat by readings to the pixel, one of which read the full rise
     textured = ({} if jump is None else
                 textured_views({cam: r.band_texture for cam, r in usable.items()}, band_texture_before or {}, jump))
     if textured:
