@@ -65,8 +65,10 @@ def _colour_cast(img, rng):
     return np.clip(np.round(img.astype(np.float32) * gains), 0, 255).astype(np.uint8)
 
 
-def _noise(img, rng):
-    return np.clip(np.round(img.astype(np.float32) + rng.normal(0.0, 4.0, img.shape)), 0, 255).astype(np.uint8)
+def _noise_of(sigma: float):
+    """Independent Gaussian sensor noise of ``sigma`` grey levels per channel."""
+    return lambda img, rng: np.clip(np.round(img.astype(np.float32) + rng.normal(0.0, sigma, img.shape)),
+                                    0, 255).astype(np.uint8)
 
 
 def _resize_75(img, rng):
@@ -83,7 +85,8 @@ PERTURBATIONS = {
     "gamma0.8": (_gamma(0.8), True),
     "gamma1.25": (_gamma(1.25), True),
     "cast": (_colour_cast, False),  # white-balance drift after the background was taken
-    "noise4": (_noise, True),
+    "noise4": (_noise_of(4.0), True),
+    "noise8": (_noise_of(8.0), True),
     "resize75": (_resize_75, True),
 }
 

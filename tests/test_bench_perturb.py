@@ -55,3 +55,12 @@ def test_an_unknown_perturbation_is_refused_with_the_known_ones(bench, tmp_path,
     with pytest.raises(SystemExit):
         bench.main([str(tmp_path), "--perturb", "fog"])
     assert "noise4" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("name, sigma", [("noise4", 4.0), ("noise8", 8.0)])
+def test_each_noise_perturbation_adds_the_sensor_noise_it_is_named_after(bench, name, sigma):
+    perturb, on_background = bench.PERTURBATIONS[name]
+    grey = np.full((240, 320, 3), 128, np.uint8)
+    noisy = perturb(grey, np.random.default_rng(0)).astype(float)
+    assert on_background
+    assert abs(noisy.mean() - 128.0) < 0.2 and 0.95 * sigma < noisy.std() < 1.05 * sigma
