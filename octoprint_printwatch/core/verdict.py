@@ -431,8 +431,7 @@ def rose_in_a_view_read_to_the_pixel(usable: Mapping[str, ShapeResult]) -> bool:
     its texture floor at the two checks before, 2.9 times as textured at the cone's shoulder."""
     if any(r.growth_pct is not None for r in usable.values()):
         return False
-    return any(r.coarse_growth_pct is not None and _steady(r.coarse_growth_pct) >= FULL_RISE_PCT
-               for r in usable.values())
+    return any(_steady(reading) >= FULL_RISE_PCT for reading in each_views_rise(usable))
 
 
 def rise_over_spans(usable: Mapping[str, ShapeResult]) -> float | None:

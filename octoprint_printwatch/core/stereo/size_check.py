@@ -292,8 +292,8 @@ class PairSizeCheck:
         #: Narrower than this (mm) a width is a few pixels wide: an edge's pixel or a stray touching it
         #: is tens of percent of it, so it is neither measured nor expected to be reconstructed.
         self.narrow_mm = max(4.0, 10.0 * self.px_mm)
-        #: Widths this pair has measured so far in the print, too narrow ones too (:meth:`_held_width`: the first, too
-        #: wide, is not held alone)
+        #: Widths this pair measured at its earlier checks of the print, too narrow ones too (:meth:`_held_width`: the
+        #: first, too wide, is not held alone)
         self.widths_read = 0
 
     # -------------------------------------------------------- rectification
@@ -541,7 +541,6 @@ class PairSizeCheck:
         if width is not None and exp_width is not None:
             result.width_mm = width
             result.width_error_pct = 100.0 * abs(width - exp_width) / exp_width
-            self.widths_read += 1
             if width < exp_width - tolerance:
                 # Too narrow is what a poorly seen side gives (dark filament on a dark bed shrinks the
                 # silhouette in both views alike); a print that stopped or shrank shows in the height,
@@ -565,7 +564,6 @@ class PairSizeCheck:
             if widest is not None and min(both) > widest + tolerance:
                 result.width_mm = min(both)
                 result.width_error_pct = 100.0 * abs(result.width_mm - exp_width) / exp_width
-                self.widths_read += 1
                 notes.append("width from the outline and the matched points (the sides are not where the model's are)")
                 terms += self._held_width(100.0 * (result.width_mm - widest - tolerance) / exp_width, notes)
             elif exp_width is not None and exp_width < self.narrow_mm:
@@ -577,18 +575,20 @@ class PairSizeCheck:
         result.error_pct = max(terms) if terms else None
         result.abstained = not terms
         result.reason = "; ".join(notes)
+        if result.width_mm is not None:
+            self.widths_read += 1
         result.seconds = time.perf_counter() - started
         return result
 
     def _held_width(self, error_pct: float, notes: list[str]) -> list[float]:
         """The width term (% beyond what the model and the pair's calibration allow) to hold against the print: none
-        for a too-wide reading that is the first width this pair measures in the print (noted in ``notes``). A width
-        needs both sides of the part seen as silhouette edges in both views, so a pair's first one comes where those
-        edges first show, with no reading of its own to compare it with; from the second on, a width over the limit is
-        held at once. A part too wide at the first reading (loose
-        material, a shifted tier) is still too wide at the next (cross-check seed 36 ``016_normal``: a thin L read
-        8.9 mm wide at the pair's first width, 39.6 % over its 6.4 mm, and 7.0-7.3 mm at every later check)."""
-        if self.widths_read == 1 and error_pct > self.settings.threshold_pct:
+        for a too-wide reading where this pair has measured no width before (:attr:`widths_read`; noted in ``notes``).
+        A width needs both sides of the part seen as silhouette edges in both views, so a pair's first one comes where
+        those edges first show, with no reading of its own to compare it with; from the second on, a width over the
+        limit is held at once. A part too wide at the first reading (loose material, a shifted tier) is still too wide
+        at the next (cross-check seed 36 ``016_normal``: a thin L read 8.9 mm wide at the pair's first width, 39.6 %
+        over its 6.4 mm, and 7.0-7.3 mm at every later check)."""
+        if self.widths_read == 0 and error_pct > self.settings.threshold_pct:
             notes.append(f"too wide by {error_pct:.1f} % beyond the tolerance at this pair's first width reading: "
                          f"not held until a second reading")
             return []
