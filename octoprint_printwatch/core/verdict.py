@@ -15,7 +15,7 @@ from .layer_shift import (BandShift, LayerShift, band_reads_lowered, confirms_la
                           estimate_layer_shift, onto_earlier_places, with_history)
 from .shape_check import ShapeResult
 from .nest import (NEST_MAX_COVERAGE, PART_SLOWED_SOMEWHAT_PCT, SOLID_MIN_COVERAGE, TEXTURE_JUMP_STRONG,
-                   texture_jump_for, textured_views)
+                   texture_jump_for, texture_jump_for_lone_reading, textured_views)
 from .tangle import TWO_VIEWS_MM2, loose_material
 
 
@@ -419,6 +419,20 @@ def rise_for_loose_material(usable: Mapping[str, ShapeResult], growth: Sequence[
     fine = median_rise(growth, usable)
     return fine if fine is not None else median_rise([g for g in each_views_rise(usable) if g >= SANK_BELOW_PCT],
                                                      usable)
+
+
+def lone_rise_reading(usable: Mapping[str, ShapeResult],
+                      rise_before: Mapping[str, float | None] | None) -> float | None:
+    """The rise since the previous check (% of the expected, -15 % or more: :func:`rise_since_previous_check`) of the
+    only one of two or more usable views that reads it, where that view read the part rising (50 %) at its previous
+    check (``rise_before``: a view that never sees the top rise reads 0 at every check), or None. No median of
+    readings exists there to weigh (:func:`enough_rise_readings`)."""
+    readings = {cam: reading for cam, r in usable.items()
+                if (reading := rise_since_previous_check(r)) is not None and reading >= SANK_BELOW_PCT}
+    if len(readings) != 1 or len(usable) < 2:
+        return None
+    ((camera, reading),) = readings.items()
+    return reading if ((rise_before or {}).get(camera) or 0.0) >= COARSE_ROSE_BEFORE_PCT else None
 
 
 def rose_in_a_view_read_to_the_pixel(usable: Mapping[str, ShapeResult]) -> bool:
@@ -853,7 +867,9 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
       (``ShapeResult.band_texture``; ``band_texture_before``: the smoothest of each camera's readings at its last
       ``TEXTURE_MEMORY_CHECKS`` checks, not a first look; :func:`core.nest.textured_views`), or twice as textured
       (TEXTURE_JUMP_STRONG) with the part rising under 80 % (PART_SLOWED_SOMEWHAT_PCT): strands piled over a part
-      that slowed, or the bed where it should be;
+      that slowed, or the bed where it should be; where only one of several views reads the rise (and read it rise
+      at its previous check), twice as textured with that view's reading under half (:func:`lone_rise_reading`,
+      :func:`core.nest.texture_jump_for_lone_reading`);
       or, not where a top surface closes, when a view that held a rise (``held_rise_before``) and reads none now (its
       finest reading) shows its band twice as textured, while the median of every view's finest reading is under
       80 % (:func:`stopped_and_textured`: its own stop is the second witness where no median of one-check readings
@@ -1007,6 +1023,11 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     jump = texture_jump_for(texture_rise)
     if jump == TEXTURE_JUMP_STRONG and rose_in_a_view_read_to_the_pixel(usable):
         jump = None   # a part that slowed somewhat by readings to the pixel, one of which read the full rise
+    lone = None if texture_rise is not None or top_closing else lone_rise_reading(usable, rise_before)
+    if lone is not None:
+        # (one view reads the rise, the others' tops hidden, often under the strands: its slow rise is the second
+        # witness of a band turned markedly textured, core.nest.texture_jump_for_lone_reading)
+        texture_rise, jump, over = lone, texture_jump_for_lone_reading(lone), " (read by one view)"
     textured = ({} if jump is None else
                 textured_views({cam: r.band_texture for cam, r in usable.items()}, band_texture_before or {}, jump))
     if textured:
