@@ -101,8 +101,9 @@ def texture_jump_for_lone_reading(rise_pct: float) -> float | None:
     to weigh; the others' tops hidden, often by the strands themselves): :data:`TEXTURE_JUMP_STRONG` under
     SLOWED_RISE_PCT, else None. One step stricter on both counts than a median's: on the twenty-six development seeds
     (thirty-seventh session) no check before an onset or of a normal print has a view 1.5 times as textured with a lone
-    reading under 50 % (two do at 1.3 times, eight at 1.5 times under 80 %), while eleven failures show a view twice as
-    textured with a lone reading under 50 % a check or more before they are caught."""
+    reading under 50 % (two do at 1.3 times, eight at 1.5 times under 80 %); replayed with the lone view's rise at its
+    previous check required (verdict.lone_rise_reading), ten failures pause a check or more sooner, six of them within
+    one check of their onset where they were not, and no other verdict changes."""
     return TEXTURE_JUMP_STRONG if rise_pct < SLOWED_RISE_PCT else None
 
 

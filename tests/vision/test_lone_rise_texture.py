@@ -47,10 +47,10 @@ def test_no_pause_where_the_lone_reading_shows_the_part_rising_or_the_look_chang
     assert decide(mild, {}, s, band_texture_before=BEFORE, rise_before=ROSE)[0] == "ok"
     # where a top surface closes (its skin changes the band's look while the outline reads no rise)
     assert decide(seed42(), {}, s, band_texture_before=BEFORE, rise_before=ROSE, top_closing=True)[0] == "ok"
-    # a view that cannot read the rise (its top hidden) proves nothing alone: no reading at all, no pause
-    # ... nor a view that read no rise at its previous check either (a top it cannot resolve reads 0 at every check)
+    # a view that read no rise at its previous check either: a top it cannot resolve reads 0 at every check
     assert lone_rise_reading(seed42(), {"s1": 0.0}) is None
     assert decide(seed42(), {}, s, band_texture_before=BEFORE, rise_before={"s1": 0.0})[0] == "ok"
+    # no view reads the rise (every top hidden): no reading to witness anything
     none = seed42(rise=None)
     assert lone_rise_reading(none, ROSE) is None
     assert decide(none, {}, s, band_texture_before=BEFORE, rise_before=ROSE)[0] == "ok"
