@@ -459,6 +459,26 @@ def rise_over_spans(usable: Mapping[str, ShapeResult]) -> float | None:
                         if r.span_growth_pct is not None and r.span_growth_pct >= SANK_BELOW_PCT], usable)
 
 
+def rise_for_texture(usable: Mapping[str, ShapeResult], rise_pct: float | None,
+                     rise_before: Mapping[str, float | None] | None) -> tuple[float | None, float | None, str]:
+    """(rise %, jump, how it was read) for decide's textured-band rule: the rise it weighs, how many times as textured
+    as before a band must look there (None: no test) and the words the reason adds. The rise is the first that
+    exists of ``rise_pct`` (:func:`rise_for_loose_material`), the views' readings over their spans where no view
+    reads it at one check (:func:`rise_over_spans`), and the reading of the only one of several views that reads it
+    (:func:`lone_rise_reading`, with its stricter :func:`core.nest.texture_jump_for_lone_reading`); no rise, no test."""
+    rise, over = rise_pct, ""
+    if rise is None:
+        rise = rise_over_spans(usable)
+        over = "" if rise is None else " over the last checks"
+    if rise is None:
+        lone = lone_rise_reading(usable, rise_before)
+        return (None, None, "") if lone is None else (lone, texture_jump_for_lone_reading(lone), " (read by one view)")
+    jump = texture_jump_for(rise)
+    if jump == TEXTURE_JUMP_STRONG and rose_in_a_view_read_to_the_pixel(usable):
+        jump = None   # a part that slowed somewhat by readings to the pixel, one of which read the full rise
+    return rise, jump, over
+
+
 def stopped_and_textured(usable: Mapping[str, ShapeResult], settings: DetectionSettings, *,
                          held_rise_before: Mapping[str, float] | None,
                          band_texture_before: Mapping[str, float] | None) -> dict[str, float]:
@@ -1016,18 +1036,9 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     # strand brings its own highlight and shadow where the printed face was smooth (the bed seen where the part
     # should be is textured too); the slow rise is the second witness, as for one view of loose material
     # (a rise of 50-79 % only with a band changed markedly: a coarse rise reading is +-25 %)
-    # (where no view reads the rise at one check, their readings over a span of checks stand in: rise_over_spans)
-    over_spans = None if rise_pct is not None or top_closing else rise_over_spans(usable)
-    texture_rise = rise_pct if over_spans is None else over_spans
-    over = "" if over_spans is None else " over the last checks"
-    jump = texture_jump_for(texture_rise)
-    if jump == TEXTURE_JUMP_STRONG and rose_in_a_view_read_to_the_pixel(usable):
-        jump = None   # a part that slowed somewhat by readings to the pixel, one of which read the full rise
-    lone = None if texture_rise is not None or top_closing else lone_rise_reading(usable, rise_before)
-    if lone is not None:
-        # (one view reads the rise, the others' tops hidden, often under the strands: its slow rise is the second
-        # witness of a band turned markedly textured, core.nest.texture_jump_for_lone_reading)
-        texture_rise, jump, over = lone, texture_jump_for_lone_reading(lone), " (read by one view)"
+    # (where no view reads the rise at one check, their readings over a span of checks stand in, or the one view's
+    # that does: rise_for_texture)
+    texture_rise, jump, over = (None, None, "") if top_closing else rise_for_texture(usable, rise_pct, rise_before)
     textured = ({} if jump is None else
                 textured_views({cam: r.band_texture for cam, r in usable.items()}, band_texture_before or {}, jump))
     if textured:
