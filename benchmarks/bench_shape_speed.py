@@ -106,14 +106,15 @@ def differences(a, b, path="result") -> list[str]:
 
 def as_version(kwargs: dict, module) -> dict:
     """check_shape's arguments for ``module``'s own ExpectedRegions class, without the arguments its check_shape
-    does not take (added since that revision)."""
+    does not take, nor the regions' fields its ExpectedRegions has not (both added since that revision)."""
     accepted = inspect.signature(module.check_shape).parameters
     kwargs = {k: v for k, v in kwargs.items() if k in accepted}
     regions = kwargs["regions"]
     if type(regions) is module.ExpectedRegions:
         return kwargs
+    known = {f.name for f in dataclasses.fields(module.ExpectedRegions)}
     return dict(kwargs, regions=module.ExpectedRegions(**{f.name: getattr(regions, f.name)
-                                                          for f in dataclasses.fields(regions)}))
+                                                          for f in dataclasses.fields(regions) if f.name in known}))
 
 
 def main(argv=None) -> int:
