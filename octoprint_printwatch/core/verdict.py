@@ -127,10 +127,15 @@ def median_rise(readings: Sequence[float], usable: Mapping[str, ShapeResult]) ->
     return float(np.median(readings)) if enough_rise_readings(readings, usable) else None
 
 
+def rise_by_view(usable: Mapping[str, ShapeResult]) -> dict[str, float]:
+    """{camera: its reading of the rise since its previous check}, fine or else to the pixel
+    (:func:`rise_since_previous_check`), for the usable views that have one."""
+    return {cam: reading for cam, r in usable.items() if (reading := rise_since_previous_check(r)) is not None}
+
+
 def each_views_rise(usable: Mapping[str, ShapeResult]) -> list[float]:
-    """Each usable view's reading of the rise since its previous check, fine or else to the pixel
-    (:func:`rise_since_previous_check`), where it has one."""
-    return [reading for r in usable.values() if (reading := rise_since_previous_check(r)) is not None]
+    """Each usable view's reading of the rise since its previous check, where it has one (:func:`rise_by_view`)."""
+    return list(rise_by_view(usable).values())
 
 
 def _steady(reading: float) -> float:
@@ -427,8 +432,7 @@ def lone_rise_reading(usable: Mapping[str, ShapeResult],
     only one of two or more usable views that reads it, where that view read the part rising (50 %) at its previous
     check (``rise_before``: a view that never sees the top rise reads 0 at every check), or None. No median of
     readings exists there to weigh (:func:`enough_rise_readings`)."""
-    readings = {cam: reading for cam, r in usable.items()
-                if (reading := rise_since_previous_check(r)) is not None and reading >= SANK_BELOW_PCT}
+    readings = {cam: reading for cam, reading in rise_by_view(usable).items() if reading >= SANK_BELOW_PCT}
     if len(readings) != 1 or len(usable) < 2:
         return None
     ((camera, reading),) = readings.items()

@@ -63,4 +63,6 @@ def test_two_readings_make_a_median_the_lone_reading_does_not_override():
     # two readings (95 % fine, 25 % to the pixel): no lone reading; their median (60 %) weighs 2x bands as before
     assert lone_rise_reading(usable, ROSE) is None
     verdict, reasons = decide(usable, {}, s, band_texture_before=BEFORE, rise_before=ROSE)
+    assert verdict == "fail"
+    assert any("as textured" in why and "rose 60% of the expected height" in why for why in reasons), reasons
     assert not any("(read by one view)" in why for why in reasons)
