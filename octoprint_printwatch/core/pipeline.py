@@ -34,6 +34,9 @@ from .verdict import (RISE_HELD_READINGS, VISIBLY_RISING_PCT, band_shifts_of, de
                       visibly_rising, without_views_never_seen_whole)
 
 VERDICTS = ("ok", "fail", "unknown")
+#: Brim widths (mm) a first look tries around the part (core.alignment.align_with_brim): slicers lay 3-10 mm
+#: (PrusaSlicer's default 5, Cura's 8).
+BRIM_WIDTHS_MM = (3.0, 5.0, 7.0, 9.0)
 
 
 # ----------------------------------------------------------------- the plan
@@ -97,6 +100,8 @@ class JobPlan:
     cache_dir: Path | None = None
     #: {(camera, margin mm): bed_marks_zone}: the same at every check (read-only arrays)
     _bed_marks: dict = field(default_factory=dict, repr=False, compare=False)
+    #: {camera: the bed around the footprint grown by each of BRIM_WIDTHS_MM}: the same at every check
+    _brims: dict = field(default_factory=dict, repr=False, compare=False)
 
     def view(self, camera: str, z: float, previous_z: float | None = None):
         """The expected view of ``camera`` at ``z``; rendered now (and kept) when not planned."""
@@ -144,6 +149,12 @@ class JobPlan:
             dont_care = bed_marks_zone(cam, self.footprint, settings.bed_marks_margin_mm)
             dont_care.flags.writeable = False
             self._bed_marks[(camera, settings.bed_marks_margin_mm)] = dont_care
+        brims = self._brims.get(camera)
+        if brims is None:
+            brims = tuple(bed_marks_zone(cam, self.footprint, width) for width in BRIM_WIDTHS_MM)
+            for brim in brims:
+                brim.flags.writeable = False
+            self._brims[camera] = brims
         reflection = reflection_zone(cam, self.footprint, z)
         before = None
         if previous_z is not None and previous_z < z:
@@ -159,7 +170,7 @@ class JobPlan:
                                px_per_mm=self.px_per_mm.get(camera, 0.0), previous_silhouette=before,
                                reflection=reflection, bed_to_image=bed_to_image,
                                height_to_image=at_part[3] - at_part[0], camera=cam,
-                               height_mm=float(z))
+                               height_mm=float(z), brims=brims)
 
 
 def _zkey(z: float) -> float:
@@ -424,7 +435,7 @@ def _probe_beyond_bound(args: dict, failed: ShapeResult, bound: float, beyond: f
     ``bound``, else None. Clearly: half the threshold and half the failing check's error to spare, not merely a
     pass (a shorter part, a runout, slid down the outline trades missing material at the top for missing
     material at the foot)."""
-    wide = replace(args["regions"], max_shift_px=bound * CALIBRATION_PROBE_WIDEN)
+    wide = replace(args["regions"], max_shift_px=bound * CALIBRATION_PROBE_WIDEN, brims=())
     probe = check_shape(**dict(args, regions=wide, anchor=None, max_drift=2))
     offset = float(np.hypot(*probe.shift_px))
     if (probe.usable and probe.passed and beyond < offset <= CALIBRATION_MAX_LEARNED * bound
@@ -452,6 +463,9 @@ class CameraState:
 
     #: (dx, dy) px: the alignment of its first passing checks, the start of every later one
     anchor: tuple[int, int] | None = None
+    #: the look that laid the anchor found the part with a brim around it (ShapeResult.placed_by_brim): later looks
+    #: keep the outline on the part by the brim too, while the prior would pull it across the brim
+    brim_found: bool = False
     #: the anchor is held (the part was tall enough for an unambiguous alignment, or a calibration offset
     #: was learned): calibration error does not change during a print
     frozen: bool = False
@@ -553,6 +567,8 @@ class CameraState:
                 return
             if anchor != self.anchor or self.anchor_share is None:
                 self.anchor_share = result.outline_coverage
+            if self.anchor is None:
+                self.brim_found = result.placed_by_brim
             self.anchor = anchor
             self.frozen = tall
 
@@ -644,6 +660,10 @@ class CheckRunner:
                 errors[name] = None
                 continue
             regions = self.plan.regions(name, z, settings, self.previous_z)
+            if state.frozen or (state.anchor is not None and not state.brim_found):
+                # a brim places the outline from a camera's first look, and at its later looks only where that look
+                # found one, until the part stands tall enough for the outline alone
+                regions = replace(regions, brims=())
             if state.calibration_offset is not None:
                 regions = replace(regions, max_shift_px=regions.max_shift_px
                                   + float(np.hypot(*state.calibration_offset)))

@@ -36,7 +36,7 @@ from .camera import Camera
 from .layer_shift import BandShift, band_shift, stretched
 from .tangle import NewMaterial, new_material, risen_top
 from .nest import STALL_READ_BELOW_GROWTH_PCT, part_coverage, region_texture
-from .alignment import (align_candidates, align_expected, displaced_part, near_any, outline_candidate,
+from .alignment import (align_candidates, align_expected, align_with_brim, displaced_part, near_any, outline_candidate,
                         outline_on_edges)
 from .growth import Rise, edge_in_the_frame, read_rise
 from .material import (Evidence, clean_mask, detectable_fraction, differs_as_a_group, enclosed, material_evidence,
@@ -90,6 +90,9 @@ class ExpectedRegions:
     height_to_image: np.ndarray | None = None   # (2,) image px per mm of height at the part (layer-shift test)
     camera: Camera | None = None   # the calibrated camera of this image (reflections of things above), or None
     height_mm: float = 0.0   # the check height: the nozzle, and what hangs with it, is never lower
+    #: the bed around the part's footprint grown by each brim width a slicer may lay (at bed level; see
+    #: core.alignment.align_with_brim): where a look finds a short part with its brim
+    brims: tuple = ()
 
 
 @dataclass
@@ -135,6 +138,8 @@ class ShapeResult:
     #: the share of the expected part the material covers where the outline was laid (0-1; Placement.coverage):
     #: under 1 where faces cannot be told from what lies behind them
     outline_coverage: float = 1.0
+    #: the outline was laid where the part stands with a brim around it (Placement.by_brim)
+    placed_by_brim: bool = False
     palette: np.ndarray | None = field(default=None, repr=False)         # (k, 3) the part's colours seen now
     #: of the missing material, what shows the background itself (% of expected; % of the newest band): the
     #: rest passes for the background pixel by pixel but not as a group, a face of nearly its colour
@@ -564,17 +569,22 @@ class Placement:
     outline_best: tuple[int, int] | None = None
     #: the share of the expected part the material (strong cues or not) covers at ``shift`` (0-1)
     coverage: float = 1.0
+    #: the part was found with a brim around it (core.alignment.align_with_brim)
+    by_brim: bool = False
 
 
 def place_outline(observed: np.ndarray, observed_strong: np.ndarray, expected: np.ndarray, band: np.ndarray,
                   prior: np.ndarray, new_edges: np.ndarray | None, shift_bound: int, *,
                   anchor: tuple[int, int] | None, max_drift: int, candidates: np.ndarray | None,
-                  track_candidates: bool, least_edge: float) -> Placement:
+                  track_candidates: bool, least_edge: float, brims: Sequence[np.ndarray] = (),
+                  holes: np.ndarray | None = None) -> Placement:
     """Stage 2 of :func:`check_shape` on one crop: where the ``expected`` silhouette goes on the ``observed``
     material (``observed_strong``: of it, what the cues shadows cannot fake found), searched within ``prior``
     (all (h, w) bool), ``shift_bound`` px of the calibrated place and ``max_drift`` px of the camera's ``anchor``;
     ``band`` (h, w) bool the newest layers, ``new_edges`` (h, w) float32 the frame's new edges in noise units (a
-    first look lays the outline on them where the overlap cannot tell, at least ``least_edge`` strong)."""
+    first look lays the outline on them where the overlap cannot tell, at least ``least_edge`` strong). ``brims``
+    (each (h, w) bool, :attr:`ExpectedRegions.brims`; none once the camera's anchor is frozen) and ``holes`` ((h, w)
+    bool, what the material encloses) let a look find the part by its brim (:func:`core.alignment.align_with_brim`)."""
     # align on the cues shadows cannot fake when they show most of the part, else on everything;
     # and on the part as it was at the previous check (where failures do not begin), so a runout or a
     # shifted top cannot pull the alignment
@@ -597,20 +607,26 @@ def place_outline(observed: np.ndarray, observed_strong: np.ndarray, expected: n
     best_candidate, shift_candidates = (align_candidates(anchor_mask & prior, template, shift_bound,
                                                          candidates=candidates)
                                         if track_candidates else (None, None))
-    on_edges = (outline_on_edges(new_edges, expected, anchor_mask & prior, template, shift_bound, (dx, dy),
-                                 least_edge)
-                if anchor is None and new_edges is not None else None)
-    if on_edges is not None:
-        # a look without an anchor, where the material fits the outline equally well over a brim of the part's
-        # colour: the frame's edges tell where the part is, and the shifts left to tell apart are those by it
-        dx, dy = on_edges
+    # A part standing in a brim of its colour is found with its brim, which fits the material only where the part
+    # stands, while the part alone fits anywhere inside it (the brim must show in the cues shadows cannot fake, and
+    # not as enclosed holes: a skirt's inside); failing that, a look without an anchor lays the outline on the
+    # frame's edges where the overlap cannot tell. The shifts left to tell apart are those by the place found.
+    found_at = (align_with_brim(observed_strong & ~holes & (prior | np.logical_or.reduce(brims)), template, brims,
+                                shift_bound, anchor=anchor, max_drift=max_drift)
+                if len(brims) and strong_shows_part and holes is not None else None)
+    by_brim = found_at is not None
+    if found_at is None and anchor is None and new_edges is not None:
+        found_at = outline_on_edges(new_edges, expected, anchor_mask & prior, template, shift_bound, (dx, dy),
+                                    least_edge)
+    if found_at is not None:
+        dx, dy = found_at
         if track_candidates:
             best_candidate, shift_candidates = align_candidates(anchor_mask & prior, template, shift_bound,
-                                                                candidates=np.array([on_edges]), max_drift=max_drift)
+                                                                candidates=np.array([found_at]), max_drift=max_drift)
     outline_best = outline_candidate(anchor_mask & prior, expected, shift_candidates) if track_candidates else None
     part = np.count_nonzero(expected)
     coverage = (np.count_nonzero(observed & prior & shift_mask(expected, dx, dy)) / part) if part else 1.0
-    return Placement((dx, dy), best_candidate, shift_candidates, outline_best, float(coverage))
+    return Placement((dx, dy), best_candidate, shift_candidates, outline_best, float(coverage), by_brim)
 
 
 def zone_places(placement: Placement, first_look: bool) -> np.ndarray:
@@ -739,7 +755,9 @@ def check_shape(
 
     placement = place_outline(observed, observed_strong, expected, band, prior, evidence.new_edges,
                               shift_bound, anchor=anchor, max_drift=max_drift, candidates=candidates,
-                              track_candidates=track_candidates, least_edge=bed_factor)
+                              track_candidates=track_candidates, least_edge=bed_factor,
+                              brims=[b[crop].astype(bool) for b in regions.brims],
+                              holes=holes)
     dx, dy = placement.shift
     expected_a = shift_mask(expected, dx, dy)
     band_a = shift_mask(band, dx, dy)
@@ -950,6 +968,7 @@ def check_shape(
         palette=palette_now,
         decisive=decisive, shift_candidates=placement.candidates, best_candidate=placement.best_candidate,
         outline_best_candidate=placement.outline_best, outline_coverage=placement.coverage,
+        placed_by_brim=placement.by_brim,
         new_outside=new_outside, moved_px=moved_px, first_look=last_observed is None,
         background_missing_pct=background_missing_pct, background_band_missing_pct=background_band_missing_pct,
         band_part_coverage=band_coverage, coarse_growth_pct=rise.coarse_growth_pct, foreign_mask=foreign_full,
