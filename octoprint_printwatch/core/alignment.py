@@ -207,7 +207,7 @@ def _overlap_map(padded: np.ndarray, template: np.ndarray, s: int) -> np.ndarray
     return full
 
 
-#: A brim explains a first look where the part with it fits the material clearly better than the part alone does:
+#: A brim explains a look where the part with it fits the material clearly better than the part alone does:
 #: by at least this share of the brim's own pixels (its ring beyond the part, about two thirds of it seen).
 BRIM_EXPLAINS_SHARE = 0.3
 
@@ -215,7 +215,7 @@ BRIM_EXPLAINS_SHARE = 0.3
 def align_with_brim(observed: np.ndarray, expected: np.ndarray, brims: "list[np.ndarray]",
                     max_shift: int, *, anchor: tuple[int, int] | None = None,
                     max_drift: int = 2) -> tuple[int, int] | None:
-    """Where a first look's material is the part with a brim around it: the shift (dx, dy), or None.
+    """Where a look's material is the part with a brim around it: the shift (dx, dy), or None.
 
     ``observed`` (h, w) bool material, ``expected`` (h, w) bool the part's silhouette, ``brims`` (h, w) bool each
     the bed around the part's footprint grown by one brim width, at bed level. A brim is material of the part's
@@ -265,10 +265,11 @@ def align_with_brim(observed: np.ndarray, expected: np.ndarray, brims: "list[np.
 #: A brim lies all round the part: each side of its ring (BRIM_SIDES sectors around the part, those holding at least
 #: BRIM_SIDE_MIN_SHARE of the ring's pixels: the part hides the rest) must be material over this share. The part's
 #: mirror image in a glass bed, its shadow or a skirt of its colour fill one side, or a thin line on each. Measured
-#: on the first looks of the twenty-six development seeds (residual: the outline's shift less the true calibration
-#: error): at 0.8, 268 views with a brim take it, 150 come 2 px or more nearer the truth, none go further, and those
-#: over 8 px off go from 31 to 0; 64 views without one take a "brim" (a skirt with the part's mirror image or shadow
-#: filling its inside), 27 nearer, 4 further (the most 3.0 -> 9.2 px); at 0.5, 448 without one, 44 further.
+#: at the first check of every recording of the twenty-six development seeds (residual: the outline's shift less
+#: the true calibration error): at 0.8, 268 views with a brim take it, 150 come 2 px or more nearer the truth, none
+#: go further, and those over 8 px off go from 31 to 0; 64 views without one take a "brim" (a skirt with the part's
+#: mirror image or shadow filling its inside), 27 nearer, 4 further (the most 3.0 -> 9.2 px); at 0.5, 448 without
+#: one, 44 further.
 BRIM_SIDE_SEEN = 0.8
 BRIM_SIDES = 8
 BRIM_SIDE_MIN_SHARE = 0.04

@@ -34,7 +34,7 @@ from .verdict import (RISE_HELD_READINGS, VISIBLY_RISING_PCT, band_shifts_of, de
                       visibly_rising, without_views_never_seen_whole)
 
 VERDICTS = ("ok", "fail", "unknown")
-#: Brim widths (mm) a first look tries around the part (core.alignment.align_with_brim): slicers lay 3-10 mm
+#: Brim widths (mm) a look tries around a short part (core.alignment.align_with_brim): slicers lay 3-10 mm
 #: (PrusaSlicer's default 5, Cura's 8).
 BRIM_WIDTHS_MM = (3.0, 5.0, 7.0, 9.0)
 

@@ -36,8 +36,8 @@ from .camera import Camera
 from .layer_shift import BandShift, band_shift, stretched
 from .tangle import NewMaterial, new_material, risen_top
 from .nest import STALL_READ_BELOW_GROWTH_PCT, part_coverage, region_texture
-from .alignment import (align_candidates, align_expected, align_with_brim, displaced_part, near_any, outline_candidate,
-                        outline_on_edges)
+from .alignment import (align_candidates, align_expected, align_with_brim, displaced_part, near_any,
+                        outline_candidate, outline_on_edges)
 from .growth import Rise, edge_in_the_frame, read_rise
 from .material import (Evidence, clean_mask, detectable_fraction, differs_as_a_group, enclosed, material_evidence,
                        not_the_part_colour, part_palette)
@@ -584,7 +584,8 @@ def place_outline(observed: np.ndarray, observed_strong: np.ndarray, expected: n
     ``band`` (h, w) bool the newest layers, ``new_edges`` (h, w) float32 the frame's new edges in noise units (a
     first look lays the outline on them where the overlap cannot tell, at least ``least_edge`` strong). ``brims``
     (each (h, w) bool, :attr:`ExpectedRegions.brims`; none once the camera's anchor is frozen) and ``holes`` ((h, w)
-    bool, what the material encloses) let a look find the part by its brim (:func:`core.alignment.align_with_brim`)."""
+    bool, what the material encloses) let a look find the part by its brim
+    (:func:`core.alignment.align_with_brim`)."""
     # align on the cues shadows cannot fake when they show most of the part, else on everything;
     # and on the part as it was at the previous check (where failures do not begin), so a runout or a
     # shifted top cannot pull the alignment
