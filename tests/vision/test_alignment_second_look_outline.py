@@ -15,19 +15,15 @@ from pathlib import Path
 import cv2
 import pytest
 
-from octoprint_printwatch.core import pipeline
 from octoprint_printwatch.core.pipeline import evaluate_recording
 from octoprint_printwatch.core.recording import load_recording
 
 from .check_runs import run_checks
 
 
-@pytest.fixture(autouse=True)
-def outlines_laid_as_before_brims(monkeypatch):
-    """These recordings' first looks laid the outline off the part, along a brim; what is tested here handles such an
-    outline whatever laid it. Since the thirty-eighth session a look finds a part in a brim by its brim
-    (core.alignment.align_with_brim) and lays it right: the brim is not looked for here."""
-    monkeypatch.setattr(pipeline, "BRIM_WIDTHS_MM", ())
+# these recordings' first looks laid the outline off the part, along a brim: what is tested handles such an
+# outline whatever laid it
+pytestmark = pytest.mark.usefixtures("brims_not_looked_for")
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "recordings"
 BLOCK = DATA / "stack_brim_calib_offset_single"

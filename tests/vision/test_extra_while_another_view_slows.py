@@ -13,12 +13,21 @@ from __future__ import annotations
 from dataclasses import replace
 from pathlib import Path
 
+import pytest
+
 from octoprint_printwatch.core.shape_check import ShapeResult
 from octoprint_printwatch.core.verdict import unseen_by_the_other_views
 
 from .check_runs import run_checks
 
 RECORDING = Path(__file__).resolve().parents[1] / "data" / "recordings" / "cone_silver_spaghetti_start_pair"
+
+
+# s1's outline lay 4 px off the part along its brim, which put the first strands beyond the brim's zone; since a look
+# finds a part in a brim by its brim (core.alignment.align_with_brim) it lies on the part, the strands stay in the
+# zone at this check and the print is paused a check later (layer 68). The rule is tested on the outline as it was
+# laid (a miscalibrated camera lays one so).
+pytestmark = pytest.mark.usefixtures("brims_not_looked_for")
 
 
 def test_spaghetti_one_view_sees_while_the_other_sees_the_part_slow_pauses_the_print():

@@ -12,6 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from octoprint_printwatch.core.layer_shift import (SHIFT_CONFIRMED, SHIFT_MIN_SUPPORT_PX, LayerShift,
                                                    contradicted_in_a_view)
@@ -19,6 +20,12 @@ from octoprint_printwatch.core.layer_shift import (SHIFT_CONFIRMED, SHIFT_MIN_SU
 from .check_runs import run_checks
 
 RECORDING = Path(__file__).resolve().parents[1] / "data" / "recordings" / "l_outline_along_brim"
+
+
+# the tested move needs an outline along the brim in one view; since a look finds a part in a brim by its brim
+# (core.alignment.align_with_brim) this recording's outline lies on the part in both, and the rule is tested on the
+# outline as it was laid before (a miscalibrated camera lays one so)
+pytestmark = pytest.mark.usefixtures("brims_not_looked_for")
 
 
 def test_a_move_one_view_contradicts_does_not_pause_the_print():
