@@ -9,6 +9,8 @@ next (:func:`align_candidates`). A part found whole somewhere else is :func:`dis
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import cv2
 import numpy as np
 
@@ -212,7 +214,7 @@ def _overlap_map(padded: np.ndarray, template: np.ndarray, s: int) -> np.ndarray
 BRIM_EXPLAINS_SHARE = 0.3
 
 
-def align_with_brim(observed: np.ndarray, expected: np.ndarray, brims: "list[np.ndarray]",
+def align_with_brim(observed: np.ndarray, expected: np.ndarray, brims: Sequence[np.ndarray],
                     max_shift: int, *, anchor: tuple[int, int] | None = None,
                     max_drift: int = 2) -> tuple[int, int] | None:
     """Where a look's material is the part with a brim around it: the shift (dx, dy), or None.

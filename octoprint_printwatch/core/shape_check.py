@@ -1037,31 +1037,25 @@ def judge_view(camera: str, changed_bed_fraction: float, max_changed_bed_fractio
     return ViewVerdict(usable=True, passed=passed, decisive=decisive, reasons=reasons)
 
 
-#: A hole is no top face of the part when more than this share of it lies where no top face can show
-#: (:func:`holes_its_top_can_fill`; a face is one piece, within the part's sides, and the share leaves a few px of
+#: A hole is the part's top face only when at least this share of it lies where a top face can show
+#: (:func:`holes_its_top_can_fill`; a face is one piece, within the part's sides, and the rest leaves a few px of
 #: rounding in the image move of height).
-HOLE_BEYOND_TOP_SHARE = 0.05
+HOLE_WITHIN_TOP_SHARE = 0.95
 
 
 def holes_its_top_can_fill(holes: np.ndarray, expected: np.ndarray, regions: ExpectedRegions, tol: float
                            ) -> np.ndarray:
     """(h, w) bool: the holes (``holes`` (h, w) bool, what the material encloses, in connected pieces) that can be the
-    part's own top face: no more than HOLE_BEYOND_TOP_SHARE of each lies outside the ``expected`` outline (grown by
-    ``tol``) moved up by the part's height in the image (``regions.height_to_image`` x ``regions.height_mm``); all of
-    them where that move is unknown. A top face lies the part's height above its footprint; the bed a brim closes
-    in where a knocked-off part stood lies at bed level, down to the outline's foot (the default set's gear knocked
-    13 mm: with the outline on the part, its empty brim hole passed for the part's face in one view, 1-5 % missing
-    where 13 % was gone, and the check after the knock passed)."""
+    part's own top face: HOLE_WITHIN_TOP_SHARE of each lies within the ``expected`` outline (grown by ``tol``) moved
+    up by the part's height in the image (``regions.height_to_image`` x ``regions.height_mm``); all of them where
+    that move is unknown. A top face lies the part's height above its footprint; the bed a brim closes in where a
+    knocked-off part stood lies at bed level, down to the outline's foot (the default set's gear knocked 13 mm: with
+    the outline on the part, its empty brim hole passed for the part's face in one view, 1-5 % missing where 13 % was
+    gone, and the check after the knock passed)."""
     if regions.height_to_image is None:
         return holes
     lift_x, lift_y = (int(round(v)) for v in np.asarray(regions.height_to_image, float) * regions.height_mm)
-    top = shift_mask(dilate(expected, tol), lift_x, lift_y)
-    count, labels = cv2.connectedComponents(holes.astype(np.uint8), connectivity=8)
-    size = np.bincount(labels[holes], minlength=count)
-    beyond = np.bincount(labels[holes & ~top], minlength=count)
-    bed = beyond > HOLE_BEYOND_TOP_SHARE * size
-    bed[0] = False
-    return holes & ~bed[labels]
+    return blobs_lying_on(holes, shift_mask(dilate(expected, tol), lift_x, lift_y), HOLE_WITHIN_TOP_SHARE)
 
 
 def not_decisive_where_it_stood(result: ShapeResult, shape_args: Mapping[str, Any]) -> ShapeResult:
