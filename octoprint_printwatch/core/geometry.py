@@ -54,6 +54,14 @@ def polygons_of(section: mf.CrossSection) -> list[np.ndarray]:
     return [np.asarray(contour, dtype=np.float64).reshape(-1, 2) for contour in section.to_polygons()]
 
 
+def grown_polygons(polygons: Sequence[np.ndarray], margin_mm: float) -> list[np.ndarray]:
+    """Contours ((n, 2) mm, outer CCW, holes CW) grown outwards by ``margin_mm`` with round corners (holes shrink)."""
+    if not len(polygons):
+        return []
+    section = mf.CrossSection([np.asarray(p, np.float64) for p in polygons], mf.FillRule.Positive)
+    return polygons_of(section.offset(float(margin_mm), mf.JoinType.Round, 2.0, 32))
+
+
 def polygons_area(polygons: Sequence[np.ndarray]) -> float:
     """Signed-sum area of contours (holes are clockwise, so they subtract), mm²."""
     total = 0.0

@@ -83,6 +83,9 @@ class JobPlan:
     check_heights : [(layer, z)] the planned checks, ascending.
     views : {(camera, z): PlannedView} rendered at the planned heights (more are added on demand).
     footprint : (n, 2) convex hull of the part's XY extent (mm, printer coordinates).
+    first_layer : the part's contours at its first layer ((n, 2) mm, outer CCW, holes CW; a brim follows them) where
+        they do not fill the footprint (FIRST_LAYER_FILLS_HULL: an L, a star, a ring), else empty: the brim zones then
+        follow the footprint.
     max_shift_px, tolerance_px : per camera, see :func:`camera_bounds`.
     """
 
@@ -97,6 +100,7 @@ class JobPlan:
     px_per_mm: dict[str, float] = field(default_factory=dict)
     prepare_seconds: float = 0.0
     notes: list[str] = field(default_factory=list)
+    first_layer: list = field(default_factory=list)
     cache_dir: Path | None = None
     #: {(camera, margin mm): bed_marks_zone}: the same at every check (read-only arrays)
     _bed_marks: dict = field(default_factory=dict, repr=False, compare=False)
@@ -151,7 +155,8 @@ class JobPlan:
             self._bed_marks[(camera, settings.bed_marks_margin_mm)] = dont_care
         brims = self._brims.get(camera)
         if brims is None:
-            brims = tuple(bed_marks_zone(cam, self.footprint, width) for width in BRIM_WIDTHS_MM)
+            brims = tuple(brim_zone(cam, self.first_layer, width) if self.first_layer
+                          else bed_marks_zone(cam, self.footprint, width) for width in BRIM_WIDTHS_MM)
             for brim in brims:
                 brim.flags.writeable = False
             self._brims[camera] = brims
@@ -215,7 +220,7 @@ def prepare_job(
                                                                       settings)
     return JobPlan(part=part, cameras=cameras, pairs=[(a, b) for a, b in pairs], check_heights=heights,
                    views=views, footprint=footprint, max_shift_px=max_shift, tolerance_px=tolerance, px_per_mm=scale,
-                   prepare_seconds=time.perf_counter() - started, notes=notes,
+                   prepare_seconds=time.perf_counter() - started, notes=notes, first_layer=brim_outline(part),
                    cache_dir=Path(cache_dir) if cache_dir else None)
 
 
@@ -267,7 +272,34 @@ def part_footprint(mesh) -> np.ndarray:
     xy = np.asarray(mesh.vertices, np.float64)[:, :2]
     if len(xy) < 3:
         raise PrintWatchError("the expected part has no extent on the bed")
-    return cv2.convexHull(xy.astype(np.float32)).reshape(-1, 2).astype(np.float64)
+    return hull_of(xy)
+
+
+def hull_of(points: np.ndarray) -> np.ndarray:
+    """(m, 2) convex hull of (n, 2) points (mm)."""
+    return cv2.convexHull(np.asarray(points, np.float32)).reshape(-1, 2).astype(np.float64)
+
+
+#: The first layer's contours are read this far above the part's bottom (mm): within any first layer.
+FIRST_LAYER_CUT_MM = 0.1
+#: A first layer covering this share of its convex hull's area is the hull, for the brim zones: they are grown from
+#: the footprint as before (a cylinder's or a box's zones differ by polygonisation alone, ~1 % of their pixels).
+FIRST_LAYER_FILLS_HULL = 0.95
+
+
+def brim_outline(part) -> list[np.ndarray]:
+    """The part's contours ((n, 2) mm) at its first layer where a brim around them is unlike one around their hull
+    (they cover under FIRST_LAYER_FILLS_HULL of it: an L's inner corner, a star's notches, a ring's hole), else []."""
+    from .geometry import polygons_area
+
+    try:
+        contours = [c for c in part.cross_section(float(part.bottom()) + FIRST_LAYER_CUT_MM) if len(c) >= 3]
+    except Exception:  # noqa: BLE001 - a section the mesh cannot give leaves the footprint's zones
+        return []
+    if not contours:
+        return []
+    hull_area = abs(polygons_area([hull_of(np.vstack(contours))]))
+    return [] if abs(polygons_area(contours)) >= FIRST_LAYER_FILLS_HULL * hull_area else contours
 
 
 def camera_bounds(camera: Camera, footprint: np.ndarray, height: float,
@@ -302,8 +334,7 @@ def _offset_polygon(polygon: np.ndarray, margin: float, samples: int = 16) -> np
         return polygon
     angles = np.linspace(0, 2 * np.pi, samples, endpoint=False)
     ring = np.column_stack([np.cos(angles), np.sin(angles)]) * margin
-    grown = (polygon[:, None, :] + ring[None, :, :]).reshape(-1, 2)
-    return cv2.convexHull(grown.astype(np.float32)).reshape(-1, 2).astype(np.float64)
+    return hull_of((polygon[:, None, :] + ring[None, :, :]).reshape(-1, 2))
 
 
 def _densify(polygon: np.ndarray, step: float = 2.0) -> np.ndarray:
@@ -350,6 +381,25 @@ def bed_marks_zone(camera: Camera, footprint: np.ndarray, margin: float) -> np.n
     """(h, w) bool: the bed ring of :func:`bed_marks_mask` (the same at every height)."""
     grown = _densify(_offset_polygon(footprint, margin))
     return _fill_projection(camera, np.column_stack([grown, np.zeros(len(grown))]))
+
+
+def brim_zone(camera: Camera, first_layer: Sequence[np.ndarray], width: float) -> np.ndarray:
+    """(h, w) bool: the bed a brim ``width`` mm wide covers with the part's first layer (``first_layer``: its contours,
+    mm), at bed level. Slicers lay a brim as loops offset from the first layer itself, into a star's notches and an
+    L's inner corner (a skirt follows the hull instead: :func:`bed_marks_zone`)."""
+    from .geometry import grown_polygons   # (manifold3d: loaded with the part, not with this module)
+
+    mask = np.zeros((camera.height, camera.width), np.uint8)
+    contours = []
+    for contour in grown_polygons(first_layer, width):
+        dense = _densify(contour)
+        uv = camera.project(np.column_stack([dense, np.zeros(len(dense))]))
+        if not np.all(np.isfinite(uv)):
+            return bed_marks_zone(camera, hull_of(np.vstack(first_layer)), width)
+        contours.append(np.round(np.clip(uv, -4 * camera.width, 5 * camera.width)).astype(np.int32))
+    if contours:
+        cv2.fillPoly(mask, contours, 1)
+    return mask.astype(bool)
 
 
 def reflection_zone(camera: Camera, footprint: np.ndarray, z: float) -> np.ndarray:
