@@ -83,9 +83,9 @@ class JobPlan:
     check_heights : [(layer, z)] the planned checks, ascending.
     views : {(camera, z): PlannedView} rendered at the planned heights (more are added on demand).
     footprint : (n, 2) convex hull of the part's XY extent (mm, printer coordinates).
-    first_layer : the part's contours at its first layer ((n, 2) mm, outer CCW, holes CW; a brim follows them) where
-        they do not fill the footprint (FIRST_LAYER_FILLS_HULL: an L, a star, a ring), else empty: the brim zones then
-        follow the footprint.
+    brim_outline : the contours a brim follows ((n, 2) mm, outer CCW, holes CW: the part's first layer) where they do
+        not fill the footprint (:func:`brim_outline_of`: an L, a star, a ring), else empty: the brim zones then follow
+        the footprint.
     max_shift_px, tolerance_px : per camera, see :func:`camera_bounds`.
     """
 
@@ -100,7 +100,7 @@ class JobPlan:
     px_per_mm: dict[str, float] = field(default_factory=dict)
     prepare_seconds: float = 0.0
     notes: list[str] = field(default_factory=list)
-    first_layer: list = field(default_factory=list)
+    brim_outline: list = field(default_factory=list)
     cache_dir: Path | None = None
     #: {(camera, margin mm): bed_marks_zone}: the same at every check (read-only arrays)
     _bed_marks: dict = field(default_factory=dict, repr=False, compare=False)
@@ -155,7 +155,7 @@ class JobPlan:
             self._bed_marks[(camera, settings.bed_marks_margin_mm)] = dont_care
         brims = self._brims.get(camera)
         if brims is None:
-            brims = tuple(brim_zone(cam, self.first_layer, width) if self.first_layer
+            brims = tuple(brim_zone(cam, self.brim_outline, width) if self.brim_outline
                           else bed_marks_zone(cam, self.footprint, width) for width in BRIM_WIDTHS_MM)
             for brim in brims:
                 brim.flags.writeable = False
@@ -220,7 +220,7 @@ def prepare_job(
                                                                       settings)
     return JobPlan(part=part, cameras=cameras, pairs=[(a, b) for a, b in pairs], check_heights=heights,
                    views=views, footprint=footprint, max_shift_px=max_shift, tolerance_px=tolerance, px_per_mm=scale,
-                   prepare_seconds=time.perf_counter() - started, notes=notes, first_layer=brim_outline(part),
+                   prepare_seconds=time.perf_counter() - started, notes=notes, brim_outline=brim_outline_of(part),
                    cache_dir=Path(cache_dir) if cache_dir else None)
 
 
@@ -283,11 +283,11 @@ def hull_of(points: np.ndarray) -> np.ndarray:
 #: The first layer's contours are read this far above the part's bottom (mm): within any first layer.
 FIRST_LAYER_CUT_MM = 0.1
 #: A first layer covering this share of its convex hull's area is the hull, for the brim zones: they are grown from
-#: the footprint as before (a cylinder's or a box's zones differ by polygonisation alone, ~1 % of their pixels).
+#: the footprint as before (a cylinder's zones differ by polygonisation alone, 1.4-2.6 % of their pixels).
 FIRST_LAYER_FILLS_HULL = 0.95
 
 
-def brim_outline(part) -> list[np.ndarray]:
+def brim_outline_of(part) -> list[np.ndarray]:
     """The part's contours ((n, 2) mm) at its first layer where a brim around them is unlike one around their hull
     (they cover under FIRST_LAYER_FILLS_HULL of it: an L's inner corner, a star's notches, a ring's hole), else []."""
     from .geometry import polygons_area
@@ -347,14 +347,19 @@ def _densify(polygon: np.ndarray, step: float = 2.0) -> np.ndarray:
     return polygon[index] + (nxt[index] - polygon[index]) * t[:, None]
 
 
+def _pixels(camera: Camera, uv: np.ndarray) -> np.ndarray:
+    """(n, 2) int32 pixels of (n, 2) finite image points, clipped a few frame widths beyond the frame (points near
+    the horizon project arbitrarily far)."""
+    return np.round(np.clip(uv, -4 * camera.width, 5 * camera.width)).astype(np.int32)
+
+
 def _fill_projection(camera: Camera, points: np.ndarray) -> np.ndarray:
     """(h, w) bool: convex hull of the projections of (n, 3) printer points."""
     mask = np.zeros((camera.height, camera.width), np.uint8)
     uv = camera.project(points)
     uv = uv[np.all(np.isfinite(uv), axis=1)]
     if len(uv) >= 3:
-        uv = np.clip(uv, -4 * camera.width, 5 * camera.width)
-        hull = cv2.convexHull(np.round(uv).astype(np.int32))
+        hull = cv2.convexHull(_pixels(camera, uv))
         cv2.fillConvexPoly(mask, hull, 1)
     return mask.astype(bool)
 
@@ -383,20 +388,20 @@ def bed_marks_zone(camera: Camera, footprint: np.ndarray, margin: float) -> np.n
     return _fill_projection(camera, np.column_stack([grown, np.zeros(len(grown))]))
 
 
-def brim_zone(camera: Camera, first_layer: Sequence[np.ndarray], width: float) -> np.ndarray:
-    """(h, w) bool: the bed a brim ``width`` mm wide covers with the part's first layer (``first_layer``: its contours,
-    mm), at bed level. Slicers lay a brim as loops offset from the first layer itself, into a star's notches and an
-    L's inner corner (a skirt follows the hull instead: :func:`bed_marks_zone`)."""
+def brim_zone(camera: Camera, outline: Sequence[np.ndarray], width: float) -> np.ndarray:
+    """(h, w) bool: the bed a brim ``width`` mm wide covers with the part's first layer (``outline``: its contours,
+    mm, :func:`brim_outline_of`), at bed level. Slicers lay a brim as loops offset from the first layer itself, into
+    a star's notches and an L's inner corner (a skirt follows the hull instead: :func:`bed_marks_zone`)."""
     from .geometry import grown_polygons   # (manifold3d: loaded with the part, not with this module)
 
     mask = np.zeros((camera.height, camera.width), np.uint8)
     contours = []
-    for contour in grown_polygons(first_layer, width):
+    for contour in grown_polygons(outline, width):
         dense = _densify(contour)
         uv = camera.project(np.column_stack([dense, np.zeros(len(dense))]))
-        if not np.all(np.isfinite(uv)):
-            return bed_marks_zone(camera, hull_of(np.vstack(first_layer)), width)
-        contours.append(np.round(np.clip(uv, -4 * camera.width, 5 * camera.width)).astype(np.int32))
+        if not np.all(np.isfinite(uv)):   # (behind the camera: the hull's zone, filled from the points in front)
+            return bed_marks_zone(camera, hull_of(np.vstack(outline)), width)
+        contours.append(_pixels(camera, uv))
     if contours:
         cv2.fillPoly(mask, contours, 1)
     return mask.astype(bool)

@@ -5,8 +5,8 @@ they claim bed the brim never covers, the brim's ring is not "seen all round" th
 shift prior put it (cross-check seed 45 ``050_spaghetti``: a silver star in its brim, s0's first look 8.5 px off the
 true calibration; its later looks read the part's newest layers "shifted" 3.8 mm and paused the print six checks before
 its onset; seed 42 ``047_layer_shift``, a ring whose hole the hull's zones fill, 7.3 px off, paused a check before its
-onset). ``core.pipeline.brim_zone`` grows the first layer itself (``JobPlan.first_layer``, ``brim_outline``: where it
-does not fill its hull; a box's or a cylinder's zones stay the footprint's).
+onset). ``core.pipeline.brim_zone`` grows the first layer itself (``JobPlan.brim_outline``, ``brim_outline_of``:
+where it does not fill its hull; a box's or a cylinder's zones stay the footprint's).
 
 Synthetic scene (tests/vision/synthetic.py), seen from above: an L-shaped part painted flat in the filament's colour,
 standing 5 px left of and 4 px above where the calibration expects it, in a brim 12 px wide that follows its outline.
@@ -21,7 +21,7 @@ import trimesh
 from octoprint_printwatch.core.camera import Camera
 from octoprint_printwatch.core.geometry import part_from_mesh
 from octoprint_printwatch.core.masks import dilate
-from octoprint_printwatch.core.pipeline import bed_marks_zone, brim_outline, brim_zone
+from octoprint_printwatch.core.pipeline import bed_marks_zone, brim_outline_of, brim_zone
 from octoprint_printwatch.core.shape_check import check_shape
 
 from .synthetic import Box, bed_texture, camera_effects, regions
@@ -96,10 +96,10 @@ def test_only_a_first_layer_unlike_its_hull_has_brim_zones_of_its_own():
         return trimesh.creation.box(bounds=[[x0, y0, 0.0], [x1, y1, 10.0]])
 
     # a box's and a cylinder's brims are their hull's: the zones stay the footprint's
-    assert brim_outline(part_from_mesh(block(80, 80, 120, 120))) == []
+    assert brim_outline_of(part_from_mesh(block(80, 80, 120, 120))) == []
     cylinder = trimesh.creation.cylinder(radius=8, height=10).apply_translation((100, 100, 5))
-    assert brim_outline(part_from_mesh(cylinder)) == []
+    assert brim_outline_of(part_from_mesh(cylinder)) == []
     # an L's brim reaches into its inner corner: the first layer's own contours
     l_shape = trimesh.boolean.union([block(80, 80, 120, 90), block(80, 80, 90, 120)], engine="manifold")
-    contours = brim_outline(part_from_mesh(l_shape))
+    contours = brim_outline_of(part_from_mesh(l_shape))
     assert len(contours) == 1 and np.ptp(contours[0], axis=0) == pytest.approx([40.0, 40.0], abs=0.01)

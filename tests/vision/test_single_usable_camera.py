@@ -24,8 +24,8 @@ def test_a_detached_part_seen_by_the_only_usable_camera_is_not_explained_away(tm
     # outline 20 px onto the part's new place (within the calibration bound), the check passed and the print
     # ran on; with both cameras the same check fails (test_alignment_second_look.py).
     # (cam1's outline as its first look laid it before a look found a part in a brim by its brim: 5 px off, along
-    # the brim, as a miscalibrated camera lays it. On the part, cam1 reads the gear's brim and the bed it closes in
-    # as the part, 1 % missing, and alone does not catch this knock: docs/detection-log.md, thirty-ninth session.)
+    # the brim, as a miscalibrated camera lays it, and reading the knocked part's rise at 11 %. On the part, cam1 reads
+    # 56 % there and the second look this tests does not arise; that outline is the next test's.)
     copy = without_background(DATA / "gear_detached_two_views", "cam2", tmp_path)
     document = evaluate_recording(load_recording(copy))
     checks = document["checks"]
