@@ -79,6 +79,11 @@ class NewMaterial:
         """The new material at the foot lies on more than half the circle around the part (no empty half circle)."""
         return self.arc_deg > SURROUNDS_ARC_DEG
 
+    @property
+    def spreads_around(self) -> bool:
+        """The new material at the foot lies on a quarter of the circle around the part or more."""
+        return self.arc_deg >= SPREAD_ARC_DEG
+
 
 #: Sectors the circle around the part's image centre is cut into to read how far around it new material lies.
 ARC_SECTORS = 8
@@ -87,6 +92,8 @@ ARC_SECTORS = 8
 SECTOR_MIN_MM2 = 1.0
 #: New material spanning more than this arc around the part surrounds it (see :func:`loose_material`).
 SURROUNDS_ARC_DEG = 180.0
+#: New material at the foot spanning at least this arc spreads around the part (see :func:`loose_material`).
+SPREAD_ARC_DEG = 90.0
 #: A surrounding view is corroborated when another view that measured new material sees at least this much of it
 #: (mm^2, the bed-marks zone's blobs included): a sector's worth, a strand's root (see :func:`loose_material`).
 SURROUNDING_WITNESS_MM2 = SECTOR_MIN_MM2
@@ -299,6 +306,10 @@ ONE_VIEW_MM2 = 30.0
 #: A part whose outline rose under this share of the expected rise (median over two or more views, %) has slowed:
 #: then one view seeing TWO_VIEWS_MM2 of new material suffices (:func:`loose_material`, ``rise_pct``)
 SLOWED_RISE_PCT = 50.0
+#: ... and one view seeing this much of it (mm^2, the bed-marks zone's blobs included) spread around the part
+#: (:data:`SPREAD_ARC_DEG`) suffices while the part rose under :data:`SPREAD_SLOWED_RISE_PCT`.
+SPREAD_MM2 = 15.0
+SPREAD_SLOWED_RISE_PCT = 75.0
 
 
 def viewpoints(directions: Mapping[str, float | None]) -> int:
@@ -322,7 +333,7 @@ def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = 
                    one_view_mm2: float = ONE_VIEW_MM2, with_foot: Mapping[str, float | None] | None = None,
                    directions: Mapping[str, float | None] | None = None,
                    rise_pct: float | None = None, surrounding: Collection[str] = (),
-                   pairs: Sequence[Sequence[str]] = ()) -> str | None:
+                   spreading: Collection[str] = (), pairs: Sequence[Sequence[str]] = ()) -> str | None:
     """The reason to pause for loose material piling up around the part, or None.
 
     ``areas`` maps every usable camera to its :attr:`NewMaterial.area_mm2` (None: not measured). A tangle
@@ -356,6 +367,14 @@ def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = 
     see some (:func:`witnessed_by_another`): a skirt or brim line drawn into one view's mask at one check (its
     contrast near that view's threshold) also lies all around the part, and is that view's alone.
 
+    ``spreading``: the cameras whose new material at the foot spans a quarter of the circle around the part or more
+    (:attr:`NewMaterial.spreads_around`). Such a view seeing :data:`SPREAD_MM2` (the zone's blobs included, witnessed
+    as a surrounding view must be) corroborates a part that rose under :data:`SPREAD_SLOWED_RISE_PCT`, not only under
+    ``SLOWED_RISE_PCT``: strands falling from a stopped top spread over the bed around the foot while the pile on the
+    top lifts the outline a little (about half the model's rise on the development seeds); what one view reads on a
+    normal print lies on one side of the part or comes with a part rising as its model (on the twenty-six
+    development seeds, no check before a failure read 15 mm^2 over a quarter circle with the median rise under 75 %).
+
     ``pairs``: stereo pairs ([left, right] names). Both cameras of a pair each seeing ``one_view_mm2`` (the zone's
     blobs included), as much as a lone camera must see, count as two sides, unless a view outside the pair measured
     new material and saw under :data:`SURROUNDING_WITNESS_MM2` of it: loops spreading over the bed around the foot
@@ -380,9 +399,13 @@ def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = 
         elif paired:
             slowed = f" in both views of {' and '.join('+'.join(pair) for pair in paired)}"
         elif viewpoints({cam: (directions or {}).get(cam) for cam in seen}) < 2:
-            if rise_pct is None or rise_pct >= SLOWED_RISE_PCT:
+            spread = sorted(cam for cam, a in seen.items() if cam in spreading and a >= SPREAD_MM2
+                            and witnessed_by_another((cam,), measured))
+            if rise_pct is None or rise_pct >= (SPREAD_SLOWED_RISE_PCT if spread else SLOWED_RISE_PCT):
                 return None
-            slowed = f" while the part rose {rise_pct:.0f}% of the expected height"
+            spread_in = (f" spread over a quarter of the circle around the part or more in {', '.join(spread)},"
+                         if rise_pct >= SLOWED_RISE_PCT else "")
+            slowed = f"{spread_in} while the part rose {rise_pct:.0f}% of the expected height"
     views = ", ".join(f"{cam} {a:.0f} mm²" for cam, a in sorted(seen.items(), key=lambda kv: -kv[1]))
     return (f"material appeared around the part since the previous check where the model has none "
             f"({views}){slowed}: spaghetti, or the part knocked loose?")

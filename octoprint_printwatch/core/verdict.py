@@ -1031,6 +1031,8 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
                             rise_pct=rise_pct,
                             surrounding={cam for cam, r in seen_loose.items()
                                          if r.new_outside is not None and r.new_outside.surrounds_part},
+                            spreading={cam for cam, r in seen_loose.items()
+                                       if r.new_outside is not None and r.new_outside.spreads_around},
                             pairs=[pair for pair in pairs if all(cam in seen_loose for cam in pair)])
     if tangle is not None:
         fail_reasons.append(tangle)
