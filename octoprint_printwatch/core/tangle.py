@@ -332,7 +332,7 @@ def witnessed_by_another(cameras: Collection[str], with_foot: Mapping[str, float
 def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = TWO_VIEWS_MM2,
                    one_view_mm2: float = ONE_VIEW_MM2, with_foot: Mapping[str, float | None] | None = None,
                    directions: Mapping[str, float | None] | None = None,
-                   rise_pct: float | None = None, surrounding: Collection[str] = (),
+                   rise_pct: float | None = None, rise_over: str = "", surrounding: Collection[str] = (),
                    spreading: Collection[str] = (), pairs: Sequence[Sequence[str]] = ()) -> str | None:
     """The reason to pause for loose material piling up around the part, or None.
 
@@ -350,7 +350,8 @@ def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = 
     and a stereo pair's two cameras see the same artefact from one place.
 
     ``rise_pct``: the median rise of the part's outline since the previous check (% of the model's) when two or
-    more views measured it (on a one-camera rig, that camera's own reading), else None. Under
+    more views measured it (on a one-camera rig, that camera's own reading), or over their spans of checks where no
+    view reads one check's rise (``rise_over`` then says so in the reason), else None. Under
     ``SLOWED_RISE_PCT`` the part has slowed, and then one view seeing ``two_views_mm2`` (the zone's blobs
     included) suffices: a tangle stops the part while its strands drape beyond the outline, and what one view
     may read as new material on a normal print (a shadow edge at the rim, the part's own side beyond a
@@ -405,7 +406,7 @@ def loose_material(areas: Mapping[str, float | None], *, two_views_mm2: float = 
                 return None
             spread_in = (f" spread over a quarter of the circle around the part or more in {', '.join(spread)},"
                          if rise_pct >= SLOWED_RISE_PCT else "")
-            slowed = f"{spread_in} while the part rose {rise_pct:.0f}% of the expected height"
+            slowed = f"{spread_in} while the part rose {rise_pct:.0f}% of the expected height{rise_over}"
     views = ", ".join(f"{cam} {a:.0f} mm²" for cam, a in sorted(seen.items(), key=lambda kv: -kv[1]))
     return (f"material appeared around the part since the previous check where the model has none "
             f"({views}){slowed}: spaghetti, or the part knocked loose?")

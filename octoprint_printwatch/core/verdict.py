@@ -463,6 +463,15 @@ def rise_over_spans(usable: Mapping[str, ShapeResult]) -> float | None:
                         if r.span_growth_pct is not None and r.span_growth_pct >= SANK_BELOW_PCT], usable)
 
 
+def rise_or_over_spans(usable: Mapping[str, ShapeResult], rise_pct: float | None) -> tuple[float | None, str]:
+    """(rise %, how it was read): ``rise_pct`` (:func:`rise_for_loose_material`), else the views' readings over their
+    spans where no view reads the rise at one check (:func:`rise_over_spans`, " over the last checks"), else None."""
+    if rise_pct is not None:
+        return rise_pct, ""
+    rise = rise_over_spans(usable)
+    return rise, "" if rise is None else " over the last checks"
+
+
 def rise_for_texture(usable: Mapping[str, ShapeResult], rise_pct: float | None,
                      rise_before: Mapping[str, float | None] | None) -> tuple[float | None, float | None, str]:
     """(rise %, jump, how it was read) for decide's textured-band rule: the rise it weighs, how many times as textured
@@ -470,10 +479,7 @@ def rise_for_texture(usable: Mapping[str, ShapeResult], rise_pct: float | None,
     exists of ``rise_pct`` (:func:`rise_for_loose_material`), the views' readings over their spans where no view
     reads it at one check (:func:`rise_over_spans`), and the reading of the only one of several views that reads it
     (:func:`lone_rise_reading`, with its stricter :func:`core.nest.texture_jump_for_lone_reading`); no rise, no test."""
-    rise, over = rise_pct, ""
-    if rise is None:
-        rise = rise_over_spans(usable)
-        over = "" if rise is None else " over the last checks"
+    rise, over = rise_or_over_spans(usable, rise_pct)
     if rise is None:
         lone = lone_rise_reading(usable, rise_before)
         return (None, None, "") if lone is None else (lone, texture_jump_for_lone_reading(lone), " (read by one view)")
@@ -1018,6 +1024,9 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
     # rig's own); where they are too few (a part seen small: a rise of 4-6 px per check), each view's fine reading
     # or else its coarse one (``coarse_growth_pct``, +-25 %) stands in (rise_for_loose_material)
     rise_pct = None if top_closing else rise_for_loose_material(usable, growth)
+    # ... and where no view reads one check's rise at all, their readings over a span of checks (rise_over_spans: a
+    # span reaching back before a stop reads more of the rise than the last check saw)
+    loose_rise, loose_over = (None, "") if top_closing else rise_or_over_spans(usable, rise_pct)
     # (a relit view's material beside the part may be lit bed: no loose material from it)
     seen_loose = {cam: r for cam, r in usable.items() if not r.relit}
     tangle = loose_material({cam: None if r.new_outside is None else r.new_outside.area_mm2
@@ -1028,7 +1037,7 @@ def decide(shape: Mapping[str, ShapeResult], size: Mapping[str, dict], settings:
                                         if r.new_outside is not None},
                             # (not where a top surface closes: a ridge's or apex's last layers are too thin
                             # for the outline to show them rise, so a normal part reads 0 % there)
-                            rise_pct=rise_pct,
+                            rise_pct=loose_rise, rise_over=loose_over,
                             surrounding={cam for cam, r in seen_loose.items()
                                          if r.new_outside is not None and r.new_outside.surrounds_part},
                             spreading={cam for cam, r in seen_loose.items()

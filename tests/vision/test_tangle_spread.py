@@ -59,3 +59,18 @@ def test_decide_pauses_a_one_camera_rig_on_strands_spread_around_a_slowed_part()
     # on one side of the part only
     narrow = replace(view, new_outside=replace(view.new_outside, arc_deg=45.0))
     assert decide({"s0": narrow}, {}, s)[0] == "ok"
+
+
+def test_where_no_view_reads_one_checks_rise_the_readings_over_a_span_stand_in():
+    s = DetectionSettings()
+    # seed-27-like figures (``046_spaghetti`` at its onset check): one camera seen small, no reading of one check's
+    # rise, 71 % over its span of checks, 27.6 mm² at the foot over 135°
+    view = figures("s0", None, at_foot_mm2=27.6)
+    view = replace(view, span_growth_pct=71.4, growth_span=3,
+                   new_outside=replace(view.new_outside, direction=0.0, arc_deg=135.0))
+    verdict, reasons = decide({"s0": view}, {}, s)
+    assert verdict == "fail" and any("rose 71% of the expected height over the last checks" in r for r in reasons)
+    # rising over the span as its model says: no pause
+    assert decide({"s0": replace(view, span_growth_pct=100.0)}, {}, s)[0] == "ok"
+    # a view reading one check's rise to the pixel is read first, and it rose
+    assert decide({"s0": replace(view, coarse_growth_pct=100.0)}, {}, s)[0] == "ok"
