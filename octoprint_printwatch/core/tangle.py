@@ -307,8 +307,9 @@ ONE_VIEW_MM2 = 30.0
 #: then one view seeing TWO_VIEWS_MM2 of new material suffices (:func:`loose_material`, ``rise_pct``)
 SLOWED_RISE_PCT = 50.0
 #: ... and one view seeing this much of it (mm^2, the bed-marks zone's blobs included) spread around the part
-#: (:data:`SPREAD_ARC_DEG`) suffices while the part rose under :data:`SPREAD_SLOWED_RISE_PCT`.
+#: (:data:`SPREAD_ARC_DEG`) suffices while the part rose under :data:`SPREAD_SLOWED_RISE_PCT` ...
 SPREAD_MM2 = 15.0
+#: ... a part slowed somewhat: a pile of strands on a stopped top lifts its outline by about half the model's rise
 SPREAD_SLOWED_RISE_PCT = 75.0
 
 
