@@ -38,7 +38,7 @@ def l_mask(dx: int = 0, dy: int = 0) -> np.ndarray:
     return BAR.moved(dx, dy).mask() | FOOT.moved(dx, dy).mask()
 
 
-def hull_of(mask: np.ndarray) -> np.ndarray:
+def hull_mask(mask: np.ndarray) -> np.ndarray:
     ys, xs = np.nonzero(mask)
     hull = cv2.convexHull(np.column_stack([xs, ys]).astype(np.int32))
     out = np.zeros(mask.shape, np.uint8)
@@ -64,7 +64,7 @@ def off_by(shift) -> int:
 
 def test_a_first_look_finds_an_l_shaped_part_by_a_brim_that_follows_it():
     widths = (6, 12, 18)
-    along_the_hull = tuple(dilate(hull_of(l_mask()), w) for w in widths)
+    along_the_hull = tuple(dilate(hull_mask(l_mask()), w) for w in widths)
     along_the_part = tuple(dilate(l_mask(), w) for w in widths)
     # the hull's zones claim the inner corner's bed for the brim: no brim is taken, and the outline lies where the
     # shift prior puts it, across the brim (12 px off, as with no brim zones at all)
@@ -89,6 +89,26 @@ def test_the_brim_zone_follows_the_first_layer_into_its_inner_corner():
     assert at(92, 92) == (True, True)        # 2 mm into the inner corner: brim
     assert at(100, 100) == (False, True)     # 10 mm into the inner corner: bed a brim never covers
     assert at(75, 100) == (False, False)     # 5 mm out: beyond a 3-mm brim
+
+
+def test_the_brim_zone_leaves_a_rings_hole_bare_where_the_hull_fills_it():
+    camera = Camera.look_at("top", (100, 100, 250), (100, 100.01, 0), width=400, height=300, hfov_deg=60)
+    angles = np.linspace(0, 2 * np.pi, 64, endpoint=False)
+    circle = np.column_stack([np.cos(angles), np.sin(angles)])
+    ring = [100 + 20 * circle, 100 + 12 * circle[::-1]]          # outer CCW, hole CW: a ring 8 mm wide
+    zone, hull_zone = brim_zone(camera, ring, 3.0), bed_marks_zone(camera, ring[0], 3.0)
+
+    def at(x, y) -> tuple[bool, bool]:
+        u, v = np.round(camera.project(np.array([[x, y, 0.0]]))[0]).astype(int)
+        return bool(zone[v, u]), bool(hull_zone[v, u])
+
+    assert at(116, 100) == (True, True)      # on the ring
+    assert at(110, 100) == (True, True)      # 2 mm into the hole: brim
+    assert at(100, 100) == (False, True)     # the hole's middle, 12 mm from the ring: bed a brim never covers
+    # and the ring's first layer is kept as its brim outline: it covers under 95 % of its hull
+    tube = trimesh.creation.annulus(r_min=12, r_max=20, height=10).apply_translation((100, 100, 5))
+    contours = brim_outline_of(part_from_mesh(tube))
+    assert len(contours) == 2
 
 
 def test_only_a_first_layer_unlike_its_hull_has_brim_zones_of_its_own():
